@@ -1,0 +1,60 @@
+# The course's everyday commands. The first use of any target creates .venv and installs the
+# project with the exact versions of constraints.txt; later uses reinstall only when
+# pyproject.toml or constraints.txt change.
+
+PYTHON ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+
+# Debian's ROS 1 (rospy, roscore, rosbag, genpy, message packages) and bubblewrap, the sandbox
+# the autograder runs student code in.
+ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-genpy \
+	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv
+
+.PHONY: help run test lab ros lint format bench lock clean
+
+help:
+	@echo "make run     drive the square-then-circle task in the simulator (bag, plot, summary)"
+	@echo "make test    run the whole test suite"
+	@echo "make lab     start JupyterLab on the course notebooks"
+	@echo "make ros     install Debian's ROS 1 packages and bubblewrap (needs apt, root or sudo)"
+	@echo "make lint    check and format the code with ruff"
+	@echo "make bench   list the benchmarks (run one with: .venv/bin/duckie bench NAME)"
+	@echo "make lock    refresh constraints.txt from the current environment"
+
+$(STAMP): pyproject.toml constraints.txt
+	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || \
+		{ echo "The course needs Python 3.11 or newer; run with PYTHON=python3.11 (or newer)."; exit 1; }
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[dev]'
+	@touch $(STAMP)
+
+run: $(STAMP)
+	$(BIN)/duckie mission --out runs/latest
+
+test: $(STAMP)
+	$(BIN)/python -m pytest
+
+lab: $(STAMP)
+	@test -d course || { echo "course/ has no released notebooks yet: see the README's status section."; exit 1; }
+	$(BIN)/jupyter lab --notebook-dir=course
+
+ros:
+	$(SUDO) apt-get update
+	DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y --no-install-recommends $(ROS_PACKAGES)
+
+lint: $(STAMP)
+	$(BIN)/ruff check --fix .
+	$(BIN)/ruff format .
+
+bench: $(STAMP)
+	$(BIN)/duckie bench
+
+lock: $(STAMP)
+	$(BIN)/python -m pip freeze --exclude-editable > constraints.txt
+
+clean:
+	rm -rf $(VENV) runs .pytest_cache .ruff_cache .hypothesis

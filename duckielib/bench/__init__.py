@@ -1,0 +1,39 @@
+"""Benchmarks, run as ``duckie bench NAME``.
+
+Each benchmark is a module here with a ``run()`` function that returns its figures as
+``(name, value)`` pairs, the headline figure last; ``duckie bench`` prints them one per line as
+``name: value``. Figures are measured, never asserted: tests check that a benchmark runs and
+prints well-formed figures, not how fast this machine is.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import Dict, List, Tuple
+
+from duckielib.errors import DuckielibError
+
+__all__ = ["BENCHMARKS", "run_benchmark"]
+
+#: Benchmark name -> (module, one-line description).
+BENCHMARKS: Dict[str, Tuple[str, str]] = {
+    "messages": (
+        "duckielib.bench.messages",
+        "build, serialize and read back the course's messages",
+    ),
+}
+
+Figure = Tuple[str, str]
+
+
+def run_benchmark(name: str) -> List[Figure]:
+    """Run one benchmark and return its figures, headline last.
+
+    Raises:
+        DuckielibError: if there is no benchmark of that name.
+    """
+    if name not in BENCHMARKS:
+        choices = ", ".join(sorted(BENCHMARKS))
+        raise DuckielibError(f"There is no benchmark called {name!r}; choose one of: {choices}.")
+    module = importlib.import_module(BENCHMARKS[name][0])
+    return module.run()

@@ -1,0 +1,195 @@
+"""ROS time: :class:`Time` (a point in time) and :class:`Duration` (a span), as in genpy.
+
+Both hold whole seconds ``secs`` and nanoseconds ``nsecs`` (0 <= nsecs < 1e9 after
+normalisation), exactly as ROS 1 stores them in messages and bags. Arithmetic follows ROS:
+``Time - Time`` is a ``Duration``, ``Time + Duration`` is a ``Time``, ``Duration * number``
+is a ``Duration``. Conversions name their unit: :meth:`to_sec` gives seconds (float),
+:meth:`to_nsec` gives integer nanoseconds.
+
+Where the clock comes from (``Time.now()``) is the job of the ROS layer, not of this module.
+"""
+
+from __future__ import annotations
+
+import math
+from numbers import Integral, Real
+
+__all__ = ["Time", "Duration"]
+
+_NS_PER_S = 1_000_000_000
+
+
+class _TimeValue:
+    """Seconds and nanoseconds, normalised; the common part of Time and Duration."""
+
+    __slots__ = ("secs", "nsecs")
+
+    def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
+        if not isinstance(secs, Real) or not isinstance(nsecs, Real):
+            raise TypeError(
+                f"{type(self).__name__} takes numbers of seconds and nanoseconds, "
+                f"not {secs!r} and {nsecs!r}."
+            )
+        if not isinstance(secs, Integral):
+            if not math.isfinite(secs):
+                raise ValueError(f"{type(self).__name__} cannot hold {secs} seconds.")
+            whole = math.floor(secs)
+            nsecs = int(nsecs) + round((secs - whole) * _NS_PER_S)
+            secs = whole
+        total = int(secs) * _NS_PER_S + int(nsecs)
+        self.secs, self.nsecs = divmod(total, _NS_PER_S)
+
+    @classmethod
+    def from_sec(cls, seconds: float):
+        """Build from a number of seconds (float)."""
+        return cls(seconds)
+
+    @classmethod
+    def from_nsec(cls, nanoseconds: int):
+        """Build from an integer number of nanoseconds."""
+        return cls(0, int(nanoseconds))
+
+    @classmethod
+    def from_seconds(cls, seconds: float):
+        """Same as :meth:`from_sec` (rospy offers both names)."""
+        return cls(seconds)
+
+    def to_sec(self) -> float:
+        """The value in seconds, as a float."""
+        return self.secs + self.nsecs / _NS_PER_S
+
+    def to_nsec(self) -> int:
+        """The value in integer nanoseconds."""
+        return self.secs * _NS_PER_S + self.nsecs
+
+    def is_zero(self) -> bool:
+        """True for the zero time (an unset header stamp) or the zero duration."""
+        return self.secs == 0 and self.nsecs == 0
+
+    def __bool__(self) -> bool:
+        return not self.is_zero()
+
+    def __eq__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.to_nsec() == other.to_nsec()
+
+    def __lt__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.to_nsec() < other.to_nsec()
+
+    def __le__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.to_nsec() <= other.to_nsec()
+
+    def __gt__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.to_nsec() > other.to_nsec()
+
+    def __ge__(self, other: object) -> bool:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.to_nsec() >= other.to_nsec()
+
+    def __hash__(self) -> int:
+        return hash((type(self).__name__, self.to_nsec()))
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}[{self.to_nsec()}]"
+
+    def __str__(self) -> str:
+        return str(self.to_nsec())
+
+    def __copy__(self):
+        return type(self)(self.secs, self.nsecs)
+
+    def __deepcopy__(self, memo: dict):
+        return type(self)(self.secs, self.nsecs)
+
+    def __reduce__(self):
+        return (type(self), (self.secs, self.nsecs))
+
+
+class Time(_TimeValue):
+    """A point in time: seconds and nanoseconds since the clock's epoch.
+
+    ``Time(0)`` is "unset", as in a message whose header stamp was never filled in.
+
+    Raises:
+        ValueError: for a negative time, which ROS cannot store.
+    """
+
+    __slots__ = ()
+
+    def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
+        super().__init__(secs, nsecs)
+        if self.secs < 0:
+            raise ValueError(f"Time cannot be negative (got {self.to_sec()} s).")
+
+    def __add__(self, other: object) -> Time:
+        if not isinstance(other, Duration):
+            return NotImplemented
+        return Time(0, self.to_nsec() + other.to_nsec())
+
+    __radd__ = __add__
+
+    def __sub__(self, other: object):
+        if isinstance(other, Time):
+            return Duration(0, self.to_nsec() - other.to_nsec())
+        if isinstance(other, Duration):
+            return Time(0, self.to_nsec() - other.to_nsec())
+        return NotImplemented
+
+
+class Duration(_TimeValue):
+    """A span of time, possibly negative.
+
+    A negative duration keeps ``secs`` negative and ``nsecs`` in [0, 1e9), as ROS does:
+    ``Duration(-0.5)`` is ``secs=-1, nsecs=500000000``.
+    """
+
+    __slots__ = ()
+
+    def __neg__(self) -> Duration:
+        return Duration(0, -self.to_nsec())
+
+    def __abs__(self) -> Duration:
+        return Duration(0, abs(self.to_nsec()))
+
+    def __add__(self, other: object):
+        if isinstance(other, Duration):
+            return Duration(0, self.to_nsec() + other.to_nsec())
+        if isinstance(other, Time):
+            return Time(0, self.to_nsec() + other.to_nsec())
+        return NotImplemented
+
+    __radd__ = __add__
+
+    def __sub__(self, other: object) -> Duration:
+        if not isinstance(other, Duration):
+            return NotImplemented
+        return Duration(0, self.to_nsec() - other.to_nsec())
+
+    def __mul__(self, factor: object) -> Duration:
+        if not isinstance(factor, Real):
+            return NotImplemented
+        return Duration(0, round(self.to_nsec() * factor))
+
+    __rmul__ = __mul__
+
+    def __truediv__(self, other: object):
+        if isinstance(other, Duration):
+            return self.to_nsec() / other.to_nsec()
+        if isinstance(other, Real):
+            return Duration(0, round(self.to_nsec() / other))
+        return NotImplemented
+
+    def __floordiv__(self, other: object):
+        if isinstance(other, Duration):
+            return self.to_nsec() // other.to_nsec()
+        if isinstance(other, Integral):
+            return Duration(0, self.to_nsec() // other)
+        return NotImplemented

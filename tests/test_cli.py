@@ -1,0 +1,66 @@
+"""The ``duckie`` command as a user runs it: real processes, real exit codes."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+
+FIGURE_LINE = re.compile(r"^[a-z0-9_]+: \S+$")
+
+
+def duckie(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run(
+        [sys.executable, "-m", "duckielib.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_bench_lists_the_benchmarks():
+    result = duckie("bench")
+    assert result.returncode == 0
+    assert "messages: build, serialize and read back the course's messages" in result.stdout
+
+
+def test_bench_messages_prints_figures_headline_last():
+    result = duckie("bench", "messages")
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert all(FIGURE_LINE.match(line) for line in lines), lines
+    names = [line.split(":")[0] for line in lines]
+    assert names[0] == "import_messages_ms"
+    assert names[-1] == "encoder_round_trips_per_s"
+    assert float(lines[-1].split(": ")[1]) > 0
+
+
+def test_unknown_benchmark_is_one_sentence_without_traceback():
+    result = duckie("bench", "warp-drive")
+    assert result.returncode == 1
+    assert result.stderr == (
+        "duckie: There is no benchmark called 'warp-drive'; choose one of: "
+        + ", ".join(sorted(_benchmark_names()))
+        + ".\n"
+    )
+    assert "Traceback" not in result.stderr
+
+
+def test_mission_says_what_is_not_built_yet():
+    result = duckie("mission")
+    assert result.returncode == 1
+    assert result.stderr.startswith("duckie: The mission runner")
+    assert "Traceback" not in result.stderr
+
+
+def test_bad_command_line_exits_2_with_usage():
+    result = duckie("fly")
+    assert result.returncode == 2
+    assert "usage: duckie" in result.stderr
+
+
+def _benchmark_names():
+    from duckielib.bench import BENCHMARKS
+
+    return BENCHMARKS

@@ -1,0 +1,53 @@
+"""Our definitions read by rosbags, the library that writes and reads the course's bags."""
+
+from __future__ import annotations
+
+import pytest
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from duckielib import messages
+from duckielib.rostime import Time
+
+DUCKIETOWN = [name for name in messages.message_types() if name.startswith("duckietown_msgs/")]
+
+
+def _rosbags_name(name: str) -> str:
+    package, short_name = name.split("/")
+    return f"{package}/msg/{short_name}"
+
+
+@pytest.fixture(scope="module")
+def typestore():
+    store = get_typestore(Stores.ROS1_NOETIC)
+    for name in DUCKIETOWN:
+        definition = messages.get_message_class(name)._full_text.split("=" * 80)[0]
+        store.register(get_types_from_msg(definition, _rosbags_name(name)))
+    return store
+
+
+@pytest.mark.parametrize("name", messages.message_types())
+def test_rosbags_computes_the_same_md5(typestore, name):
+    _, md5 = typestore.generate_msgdef(_rosbags_name(name), ros_version=1)
+    assert md5 == messages.get_message_class(name)._md5sum
+
+
+def test_rosbags_reads_and_writes_the_same_bytes(typestore):
+    pattern = messages.LEDPattern(
+        header=messages.Header(seq=4, stamp=Time(1700000000, 250), frame_id="leds"),
+        color_list=["red", "white"],
+        rgb_vals=[messages.ColorRGBA(0.8, 0.0, 0.0, 1.0), messages.ColorRGBA(0.8, 0.8, 0.8, 1.0)],
+        color_mask=[1, 1, 1, 1, 1],
+        frequency=0.0,
+        frequency_mask=[0, 0, 0, 0, 0],
+    )
+    name = "duckietown_msgs/msg/LEDPattern"
+    decoded = typestore.deserialize_ros1(pattern.to_bytes(), name)
+    assert decoded.header.stamp.sec == 1700000000
+    assert decoded.color_list == ["red", "white"]
+    assert decoded.rgb_vals[1].g == pytest.approx(0.8)
+    assert list(decoded.color_mask) == [1, 1, 1, 1, 1]
+    assert bytes(typestore.serialize_ros1(decoded, name)) == pattern.to_bytes()
+
+    tick = messages.WheelEncoderStamped(data=-123456, resolution=135, type=1)
+    decoded = typestore.deserialize_ros1(tick.to_bytes(), "duckietown_msgs/msg/WheelEncoderStamped")
+    assert (decoded.data, decoded.resolution, decoded.type) == (-123456, 135, 1)

@@ -1,0 +1,130 @@
+"""The robot-deployed modules stay pure: Python 3.8, standard library and numpy only.
+
+The list of those modules is kept once, in pyproject.toml under ``[tool.duckielib]``.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import tomllib
+
+ROOT = Path(__file__).resolve().parents[1]
+LAPTOP_ONLY = ("pymunk", "rosbags", "matplotlib", "rospy", "PIL", "nbgrader", "jupyterlab")
+
+
+def robot_modules() -> list[str]:
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    return config["tool"]["duckielib"]["robot-modules"]
+
+
+def robot_module_names() -> list[str]:
+    names = []
+    for entry in robot_modules():
+        path = ROOT / entry
+        files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
+        for file in files:
+            parts = file.relative_to(ROOT).with_suffix("").parts
+            names.append(".".join(parts[:-1] if parts[-1] == "__init__" else parts))
+    return names
+
+
+def tool(name: str) -> str:
+    found = shutil.which(name, path=str(Path(sys.executable).parent))
+    if found is None:
+        pytest.fail(f"{name} is not installed in the environment; run `make test` to install it.")
+    return found
+
+
+def test_robot_modules_exist():
+    for entry in robot_modules():
+        assert (ROOT / entry).exists(), f"pyproject.toml lists {entry}, which does not exist"
+
+
+def test_robot_modules_run_on_python_3_8():
+    result = subprocess.run(
+        [
+            tool("vermin"),
+            "--target=3.8-",
+            "--violations",
+            "--no-tips",
+            "--no-parse-comments",
+            "--eval-annotations",
+            *[str(ROOT / entry) for entry in robot_modules()],
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_vermin_catches_newer_syntax(tmp_path):
+    newer = tmp_path / "newer.py"
+    newer.write_text("def f(x):\n    match x:\n        case 1:\n            return 1\n")
+    result = subprocess.run(
+        [tool("vermin"), "--target=3.8-", "--violations", "--no-tips", str(newer)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode != 0
+
+
+BLOCKER = """
+import importlib.abc, sys
+class Block(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in {blocked!r}:
+            raise ImportError("blocked laptop-only package: " + name)
+        return None
+sys.meta_path.insert(0, Block())
+import importlib
+for name in {modules!r}:
+    importlib.import_module(name)
+print("ok")
+"""
+
+
+def test_robot_modules_import_with_laptop_packages_blocked():
+    script = BLOCKER.format(blocked=LAPTOP_ONLY, modules=robot_module_names())
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "ok"
+
+
+def test_import_duckielib_loads_nothing_heavy():
+    script = (
+        "import sys, duckielib\n"
+        f"print(sorted(m for m in sys.modules if m.split('.')[0] in {(*LAPTOP_ONLY, 'numpy')!r}))"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True
+    )
+    assert result.stdout.strip() == "[]"
+
+
+def test_ruff_lint_is_clean():
+    result = subprocess.run(
+        [tool("ruff"), "check", "--no-cache", str(ROOT)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_ruff_format_is_clean():
+    result = subprocess.run(
+        [tool("ruff"), "format", "--check", "--no-cache", str(ROOT)],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
