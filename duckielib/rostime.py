@@ -132,15 +132,15 @@ class Time(_TimeValue):
     def __add__(self, other: object) -> Time:
         if not isinstance(other, Duration):
             return NotImplemented
-        return Time(0, self.to_nsec() + other.to_nsec())
+        return type(self)(0, self.to_nsec() + other.to_nsec())
 
     __radd__ = __add__
 
     def __sub__(self, other: object):
         if isinstance(other, Time):
-            return Duration(0, self.to_nsec() - other.to_nsec())
+            return _duration_type(other)(0, self.to_nsec() - other.to_nsec())
         if isinstance(other, Duration):
-            return Time(0, self.to_nsec() - other.to_nsec())
+            return type(self)(0, self.to_nsec() - other.to_nsec())
         return NotImplemented
 
 
@@ -154,16 +154,16 @@ class Duration(_TimeValue):
     __slots__ = ()
 
     def __neg__(self) -> Duration:
-        return Duration(0, -self.to_nsec())
+        return type(self)(0, -self.to_nsec())
 
     def __abs__(self) -> Duration:
-        return Duration(0, abs(self.to_nsec()))
+        return type(self)(0, abs(self.to_nsec()))
 
     def __add__(self, other: object):
         if isinstance(other, Duration):
-            return Duration(0, self.to_nsec() + other.to_nsec())
+            return type(self)(0, self.to_nsec() + other.to_nsec())
         if isinstance(other, Time):
-            return Time(0, self.to_nsec() + other.to_nsec())
+            return type(other)(0, self.to_nsec() + other.to_nsec())
         return NotImplemented
 
     __radd__ = __add__
@@ -171,12 +171,12 @@ class Duration(_TimeValue):
     def __sub__(self, other: object) -> Duration:
         if not isinstance(other, Duration):
             return NotImplemented
-        return Duration(0, self.to_nsec() - other.to_nsec())
+        return type(self)(0, self.to_nsec() - other.to_nsec())
 
     def __mul__(self, factor: object) -> Duration:
         if not isinstance(factor, Real):
             return NotImplemented
-        return Duration(0, round(self.to_nsec() * factor))
+        return type(self)(0, round(self.to_nsec() * factor))
 
     __rmul__ = __mul__
 
@@ -184,12 +184,17 @@ class Duration(_TimeValue):
         if isinstance(other, Duration):
             return self.to_nsec() / other.to_nsec()
         if isinstance(other, Real):
-            return Duration(0, round(self.to_nsec() / other))
+            return type(self)(0, round(self.to_nsec() / other))
         return NotImplemented
 
     def __floordiv__(self, other: object):
         if isinstance(other, Duration):
             return self.to_nsec() // other.to_nsec()
         if isinstance(other, Integral):
-            return Duration(0, self.to_nsec() // other)
+            return type(self)(0, self.to_nsec() // other)
         return NotImplemented
+
+
+def _duration_type(time: Time) -> type:
+    """The Duration class that goes with a Time class (rospy's goes with rospy's)."""
+    return getattr(time, "duration_class", Duration)

@@ -1,0 +1,21 @@
+"""ROS 1 in the notebook: rospy's API on an in-process graph that runs on simulated time.
+
+A node written for a real Duckiebot runs here unchanged::
+
+    from duckielib.ros import Graph, rospy
+
+    graph = Graph()
+    graph.launch(talker)     # talker() calls rospy.init_node(...) like any rospy node
+    graph.launch(listener)
+    graph.run(5.0)           # five simulated seconds, in a fraction of a real one
+
+See :mod:`duckielib.ros.rospy` for the API and :mod:`duckielib.ros.graph` for how the graph
+schedules nodes deterministically.
+"""
+
+from __future__ import annotations
+
+from duckielib.ros import rospy
+from duckielib.ros.graph import Graph, LogRecord, NodeCrashed, default_graph
+
+__all__ = ["Graph", "LogRecord", "NodeCrashed", "default_graph", "rospy"]

@@ -1,0 +1,564 @@
+"""An in-process ROS graph on simulated time: master, parameter server, clock and scheduler.
+
+The graph plays the part that ``roscore`` and the operating system play on a robot: it knows
+every node, topic, service and parameter, carries messages from publishers to subscribers, and
+decides what runs when. It does so deterministically, on a simulated clock:
+
+- Time only moves when everything is waiting. A node's ``rospy.sleep(5)`` or ``rate.sleep()``
+  schedules its wake-up at a simulated time; the graph then jumps the clock straight to the
+  next thing due, so five simulated seconds take microseconds of real time.
+- Exactly one piece of node code runs at a time, in the order given by simulated time and, for
+  equal times, by when it was scheduled. The same nodes and the same seed give the same run.
+- A node written as a loop (``while not rospy.is_shutdown(): ... rate.sleep()``) runs in its own
+  thread, but only while the graph hands it the baton; callbacks (subscribers, timers) run in
+  the thread that drives the graph, with their node as the current one.
+
+Whoever calls :meth:`Graph.run` (a notebook cell, a test, the mission runner) drives the graph;
+so does a notebook that calls ``rospy.init_node`` and then ``rospy.sleep``.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import heapq
+import itertools
+import sys
+import threading
+import traceback
+from typing import Any, Callable, Dict, Iterator, List, Optional, TextIO, Tuple
+
+from duckielib.errors import DuckielibError
+from duckielib.ros import names
+from duckielib.ros.exceptions import ROSException, ROSInitException
+
+__all__ = ["Graph", "LogRecord", "NodeCrashed", "default_graph", "DEBUG", "INFO", "WARN", "ERROR"]
+
+NS_PER_S = 1_000_000_000
+DEBUG, INFO, WARN, ERROR, FATAL = 1, 2, 4, 8, 16
+LEVEL_NAMES = {DEBUG: "DEBUG", INFO: "INFO", WARN: "WARN", ERROR: "ERROR", FATAL: "FATAL"}
+#: How many times a node may be resumed after shutdown before the graph gives up on it.
+_SHUTDOWN_PATIENCE = 1000
+
+_local = threading.local()
+_default: List[Graph] = []
+
+
+class NodeCrashed(DuckielibError):
+    """A node's code raised an exception; the node was shut down."""
+
+
+class LogRecord:
+    """One logged line: simulated time (s), level, node name and text."""
+
+    __slots__ = ("level", "node", "text", "time")
+
+    def __init__(self, time: float, level: int, node: str, text: str) -> None:
+        self.time = time
+        self.level = level
+        self.node = node
+        self.text = text
+
+    def __repr__(self) -> str:
+        return f"[{LEVEL_NAMES[self.level]}] [{self.time:.3f}] [{self.node}]: {self.text}"
+
+
+class _Event:
+    """Something scheduled to happen at a simulated time; cancel() makes it a no-op."""
+
+    __slots__ = ("action", "cancelled")
+
+    def __init__(self, action: Callable[[], None]) -> None:
+        self.action = action
+        self.cancelled = False
+
+    def cancel(self) -> None:
+        self.cancelled = True
+
+
+class _Actor:
+    """A node's main code, running in a thread that runs only while it holds the baton."""
+
+    def __init__(
+        self,
+        graph: Graph,
+        target: Callable[..., Any],
+        args: tuple,
+        kwargs: dict,
+        launch: Dict[str, Any],
+    ) -> None:
+        self.graph = graph
+        self.target = target
+        self.args = args
+        self.kwargs = kwargs
+        self.launch = launch
+        self.node: Any = None
+        self.wake = threading.Event()
+        self.finished = False
+        self.error: Optional[BaseException] = None
+        self.predicate: Optional[Callable[[], bool]] = None
+        self.token = 0
+        self.resumes_after_shutdown = 0
+        label = launch.get("name") or getattr(target, "__name__", "node")
+        self.thread = threading.Thread(target=self._main, name=f"node:{label}", daemon=True)
+
+    def _main(self) -> None:
+        self.wake.wait()
+        self.wake.clear()
+        _local.actor = self
+        _local.stack = []
+        try:
+            self.target(*self.args, **self.kwargs)
+        except KeyboardInterrupt:
+            pass  # ROSInterruptException (shutdown during a sleep) ends a node normally
+        except BaseException as error:
+            self.error = error
+            node_name = self.node.name if self.node is not None else self.thread.name[5:]
+            self.graph._log(
+                ERROR,
+                node_name,
+                "".join(
+                    traceback.format_exception(type(error), error, error.__traceback__)
+                ).rstrip(),
+            )
+        finally:
+            self.finished = True
+            if self.node is not None and not self.node.is_shutdown:
+                reason = "the node's code raised an exception" if self.error else "node finished"
+                _local.stack.append(self.node)
+                try:
+                    self.node.shutdown(reason)
+                finally:
+                    _local.stack.pop()
+            self.graph._driver_wake.set()
+
+
+class Graph:
+    """An in-process ROS master with a simulated clock and a deterministic scheduler.
+
+    Args:
+        start_time: the clock's first reading, in seconds.
+        stdout: where info and debug lines are printed (default: ``sys.stdout`` at print time).
+        stderr: where warnings and errors are printed (default: ``sys.stderr`` at print time).
+        echo_logs: False to keep log lines only in :attr:`log`, without printing them.
+
+    Creating a graph makes it the default one, the graph a notebook's own node joins when it
+    calls ``rospy.init_node``.
+    """
+
+    def __init__(
+        self,
+        start_time: float = 0.0,
+        stdout: Optional[TextIO] = None,
+        stderr: Optional[TextIO] = None,
+        echo_logs: bool = True,
+    ) -> None:
+        self._now_ns = round(start_time * NS_PER_S)
+        self._events: List[Tuple[int, int, _Event]] = []
+        self._sequence = itertools.count()
+        self._clock_listeners: List[Callable[[int], None]] = []
+        self._driver: Optional[int] = None
+        self._driver_wake = threading.Event()
+        self._waiting: List[_Actor] = []
+        self._actors: List[_Actor] = []
+        self._foreground: Dict[int, Any] = {}
+        self._anonymous = itertools.count(1)
+        self._crash: Optional[Tuple[str, BaseException]] = None
+        self.nodes: Dict[str, Any] = {}
+        self.topics: Dict[str, Any] = {}
+        self.services: Dict[str, Any] = {}
+        self.params: Dict[str, Any] = {}
+        self.log: List[LogRecord] = []
+        self.stdout = stdout
+        self.stderr = stderr
+        self.echo_logs = echo_logs
+        self.is_shutdown = False
+        _default[:] = [self]
+
+    # -- clock ------------------------------------------------------------------------------
+    @property
+    def now_ns(self) -> int:
+        """The simulated time, in integer nanoseconds."""
+        return self._now_ns
+
+    @property
+    def time(self) -> float:
+        """The simulated time, in seconds."""
+        return self._now_ns / NS_PER_S
+
+    def add_clock_listener(self, listener: Callable[[int], None]) -> None:
+        """Call ``listener(t_ns)`` before the clock moves forward to ``t_ns``.
+
+        The simulator uses this to advance its physics to the time of the next event.
+        """
+        self._clock_listeners.append(listener)
+
+    def _advance_to(self, t_ns: int) -> None:
+        if t_ns > self._now_ns:
+            for listener in self._clock_listeners:
+                listener(t_ns)
+            self._now_ns = t_ns
+
+    # -- scheduling -------------------------------------------------------------------------
+    def schedule(self, t_ns: int, action: Callable[[], None]) -> _Event:
+        """Run ``action()`` when the clock reaches ``t_ns`` (now, if that is in the past)."""
+        event = _Event(action)
+        heapq.heappush(self._events, (max(t_ns, self._now_ns), next(self._sequence), event))
+        return event
+
+    def call_soon(self, action: Callable[[], None]) -> _Event:
+        """Run ``action()`` at the current simulated time, after what is already due now."""
+        return self.schedule(self._now_ns, action)
+
+    def run(self, duration: float) -> None:
+        """Advance the simulated clock by ``duration`` seconds, running everything due.
+
+        Raises:
+            NodeCrashed: if a node's main code raised an exception (the node is shut down).
+            ROSException: if called from inside a node launched on this graph.
+        """
+        if not duration >= 0:
+            raise ValueError(f"Graph.run() needs a duration of 0 s or more, not {duration!r}.")
+        self._drive(self._now_ns + round(duration * NS_PER_S), None)
+
+    def run_until(self, condition: Callable[[], bool], timeout: float) -> bool:
+        """Advance the clock until ``condition()`` is true or ``timeout`` seconds have passed.
+
+        Returns:
+            Whether the condition became true.
+        """
+        return self._drive(self._now_ns + round(timeout * NS_PER_S), condition)
+
+    def _drive(self, stop_ns: Optional[int], predicate: Optional[Callable[[], bool]]) -> bool:
+        me = threading.get_ident()
+        if getattr(_local, "actor", None) is not None:
+            raise ROSException("A node launched on the graph cannot drive it; use rospy.sleep().")
+        if self._driver not in (None, me):
+            raise ROSException("Another thread is already running this graph.")
+        outermost = self._driver is None
+        self._driver = me
+        try:
+            while True:
+                self._raise_crash()
+                if predicate is not None and predicate():
+                    return True
+                if not self._events or (stop_ns is not None and self._events[0][0] > stop_ns):
+                    if stop_ns is not None:
+                        self._advance_to(stop_ns)
+                    return predicate is None
+                t_ns, _, event = heapq.heappop(self._events)
+                if event.cancelled:
+                    continue
+                self._advance_to(t_ns)
+                event.action()
+                self._check_waiting()
+        finally:
+            if outermost:
+                self._driver = None
+
+    def _raise_crash(self) -> None:
+        if self._crash is not None:
+            name, error = self._crash
+            self._crash = None
+            raise NodeCrashed(
+                f"Node {name} stopped with {type(error).__name__}: {error} "
+                "(its traceback is in the log above)."
+            ) from error
+
+    # -- actors -----------------------------------------------------------------------------
+    def launch(
+        self,
+        target: Callable[..., Any],
+        *args: Any,
+        name: Optional[str] = None,
+        namespace: str = "/",
+        remap: Optional[Dict[str, str]] = None,
+        params: Optional[Dict[str, Any]] = None,
+        **kwargs: Any,
+    ) -> None:
+        """Start ``target(*args, **kwargs)`` as a node's main code, like ``roslaunch`` would.
+
+        The code calls ``rospy.init_node`` itself, as on a robot. It starts running when the
+        graph is next driven (``graph.run(...)``).
+
+        Args:
+            target: the node's main function.
+            *args: positional arguments for ``target``.
+            name: overrides the name given to ``init_node`` (roslaunch's ``name``).
+            namespace: the namespace the node runs in, for example ``"/duckiebot"``.
+            remap: topic and service remappings, ``{"from": "to"}``, resolved in the namespace.
+            params: private parameters (``~name``), set before the node starts.
+            **kwargs: keyword arguments for ``target``.
+        """
+        namespace = names.normalize_namespace(namespace)
+        remappings = {
+            names.resolve(source, namespace): names.resolve(destination, namespace)
+            for source, destination in (remap or {}).items()
+        }
+        launch = {
+            "name": name,
+            "namespace": namespace,
+            "remap": remappings,
+            "params": dict(params or {}),
+        }
+        actor = _Actor(self, target, args, kwargs, launch)
+        self._actors.append(actor)
+        actor.thread.start()
+        self.call_soon(lambda: self._resume(actor))
+
+    def _resume(self, actor: _Actor) -> None:
+        """Hand the baton to ``actor`` and wait until it blocks or finishes."""
+        if actor.finished:
+            return
+        if self.is_shutdown or (actor.node is not None and actor.node.is_shutdown):
+            actor.resumes_after_shutdown += 1
+            if actor.resumes_after_shutdown > _SHUTDOWN_PATIENCE:
+                return
+        self._driver_wake.clear()
+        actor.wake.set()
+        interrupted = None
+        while True:
+            try:
+                self._driver_wake.wait()
+                break
+            except KeyboardInterrupt as error:  # finish the hand-back, then stop
+                interrupted = error
+        if actor.finished and actor.error is not None and self._crash is None:
+            self._crash = (actor.node.name if actor.node else actor.thread.name[5:], actor.error)
+        if interrupted is not None:
+            raise interrupted
+
+    def _check_waiting(self) -> None:
+        for actor in list(self._waiting):
+            if actor in self._waiting and actor.predicate is not None and actor.predicate():
+                self._waiting.remove(actor)
+                self._resume(actor)
+
+    def _wake(self, actor: _Actor, token: int) -> None:
+        if actor.token == token and actor in self._waiting:
+            self._waiting.remove(actor)
+            self._resume(actor)
+
+    def block(self, deadline_ns: Optional[int], predicate: Callable[[], bool]) -> bool:
+        """Block the calling node until ``predicate()`` is true or the clock reaches a deadline.
+
+        Called by rospy's blocking functions. In a launched node it hands the baton back to
+        the graph; in the thread that drives the graph it drives the graph itself.
+
+        Returns:
+            Whether the predicate is true when the call returns.
+
+        Raises:
+            ROSException: if nothing is left to happen and the wait could never end.
+        """
+        if predicate():
+            return True
+        actor = getattr(_local, "actor", None)
+        if actor is None:
+            if self._drive(deadline_ns, predicate):
+                return True
+            if deadline_ns is None:
+                raise ROSException(
+                    "This call would wait forever: nothing else is scheduled on the graph."
+                )
+            return predicate()
+        actor.token += 1
+        actor.predicate = predicate
+        self._waiting.append(actor)
+        if deadline_ns is not None:
+            token = actor.token
+            self.schedule(deadline_ns, lambda: self._wake(actor, token))
+        self._driver_wake.set()
+        actor.wake.wait()
+        actor.wake.clear()
+        actor.predicate = None
+        return predicate()
+
+    # -- nodes ------------------------------------------------------------------------------
+    def current_actor(self) -> Optional[_Actor]:
+        """The launched node whose thread is calling, if any."""
+        actor = getattr(_local, "actor", None)
+        return actor if actor is not None and actor.graph is self else None
+
+    def foreground_node(self) -> Any:
+        """The node the calling (non-launched) thread created with ``rospy.init_node``."""
+        return self._foreground.get(threading.get_ident())
+
+    def anonymous_suffix(self) -> str:
+        """A deterministic suffix for anonymous node names."""
+        return f"_{next(self._anonymous)}"
+
+    def add_node(self, node: Any) -> None:
+        """Register a node; a node already registered under that name is shut down, as in ROS."""
+        old = self.nodes.get(node.name)
+        if old is not None and not old.is_shutdown:
+            old.shutdown("a new node registered with the same name")
+        self.nodes[node.name] = node
+        actor = self.current_actor()
+        if actor is not None:
+            actor.node = node
+        else:
+            self._foreground[threading.get_ident()] = node
+
+    def remove_node(self, node: Any) -> None:
+        """Forget a node that shut down.
+
+        The code that ran it still sees it (shut down), so ``rospy.is_shutdown()`` stays true.
+        """
+        if self.nodes.get(node.name) is node:
+            del self.nodes[node.name]
+
+    def shutdown(self, reason: str = "graph shutdown") -> None:
+        """Shut every node down (running their shutdown hooks) and stop their threads."""
+        self.is_shutdown = True
+        for node in list(self.nodes.values()):
+            if not node.is_shutdown:
+                node.shutdown(reason)
+        if getattr(_local, "actor", None) is None and self._driver in (None, threading.get_ident()):
+            waiting = [actor for actor in self._actors if not actor.finished]
+            for actor in waiting:
+                if actor in self._waiting:
+                    self._waiting.remove(actor)
+                self._resume(actor)
+            self._crash = None
+
+    # -- parameters -------------------------------------------------------------------------
+    def set_param(self, name: str, value: Any) -> None:
+        """Set a parameter by global name; a dict value sets a whole namespace."""
+        parts = [part for part in name.split("/") if part]
+        if not parts:
+            if not isinstance(value, dict):
+                raise ROSException("Only a dictionary can be set as the root parameter '/'.")
+            self.params = _copy_tree(value)
+            return
+        tree = self.params
+        for part in parts[:-1]:
+            child = tree.get(part)
+            if not isinstance(child, dict):
+                child = tree[part] = {}
+            tree = child
+        tree[parts[-1]] = _copy_tree(value)
+
+    def get_param(self, name: str) -> Any:
+        """Get a parameter by global name (a namespace gives a dict).
+
+        Raises:
+            KeyError: if it is not set, as rospy does.
+        """
+        tree: Any = self.params
+        for part in [part for part in name.split("/") if part]:
+            if not isinstance(tree, dict) or part not in tree:
+                raise KeyError(name)
+            tree = tree[part]
+        return _copy_tree(tree)
+
+    def has_param(self, name: str) -> bool:
+        """Whether a parameter (or namespace) is set."""
+        try:
+            self.get_param(name)
+        except KeyError:
+            return False
+        return True
+
+    def delete_param(self, name: str) -> None:
+        """Delete a parameter or namespace.
+
+        Raises:
+            KeyError: if it is not set.
+        """
+        parts = [part for part in name.split("/") if part]
+        tree: Any = self.params
+        for part in parts[:-1]:
+            if not isinstance(tree, dict) or part not in tree:
+                raise KeyError(name)
+            tree = tree[part]
+        if not parts or not isinstance(tree, dict) or parts[-1] not in tree:
+            raise KeyError(name)
+        del tree[parts[-1]]
+
+    def param_names(self) -> List[str]:
+        """Every parameter's global name, sorted (``rosparam list``)."""
+        found: List[str] = []
+
+        def walk(prefix: str, tree: Dict[str, Any]) -> None:
+            for key, value in tree.items():
+                if isinstance(value, dict) and value:
+                    walk(f"{prefix}/{key}", value)
+                else:
+                    found.append(f"{prefix}/{key}")
+
+        walk("", self.params)
+        return sorted(found)
+
+    # -- logging ----------------------------------------------------------------------------
+    def _log(self, level: int, node: str, text: str) -> None:
+        record = LogRecord(self.time, level, node, text)
+        self.log.append(record)
+        if not self.echo_logs:
+            return
+        stream = (self.stdout or sys.stdout) if level <= INFO else (self.stderr or sys.stderr)
+        print(f"[{LEVEL_NAMES[level]}] [{self.time:.3f}] [{node}]: {text}", file=stream)
+
+    def log_message(self, level: int, node: str, text: str) -> None:
+        """Record a log line of ``node`` and print it (info to stdout, warnings to stderr)."""
+        self._log(level, node, text)
+
+
+def _copy_tree(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {key: _copy_tree(item) for key, item in value.items()}
+    if isinstance(value, list):
+        return [_copy_tree(item) for item in value]
+    return value
+
+
+def default_graph() -> Graph:
+    """The graph created last (a new one if there is none yet)."""
+    if not _default:
+        Graph()
+    return _default[0]
+
+
+def current_node(required_by: str = "this call") -> Any:
+    """The node whose code is running: a callback's node, a launched node, or the caller's own.
+
+    Raises:
+        ROSInitException: if the calling code has not called ``rospy.init_node`` yet.
+    """
+    stack = getattr(_local, "stack", None)
+    if stack:
+        return stack[-1]
+    actor = getattr(_local, "actor", None)
+    if actor is not None:
+        if actor.node is None:
+            raise ROSInitException(
+                f"{required_by} needs a node: call rospy.init_node('name') first."
+            )
+        return actor.node
+    if _default:
+        node = _default[0].foreground_node()
+        if node is not None:
+            return node
+    raise ROSInitException(f"{required_by} needs a node: call rospy.init_node('name') first.")
+
+
+def current_graph() -> Graph:
+    """The graph of the calling node, or the default graph if the caller has no node yet."""
+    actor = getattr(_local, "actor", None)
+    if actor is not None:
+        return actor.graph
+    stack = getattr(_local, "stack", None)
+    if stack:
+        return stack[-1].graph
+    return default_graph()
+
+
+@contextlib.contextmanager
+def node_context(node: Any) -> Iterator[Any]:
+    """Run code as ``node``: callbacks and service handlers run inside this context."""
+    if not hasattr(_local, "stack"):
+        _local.stack = []
+    _local.stack.append(node)
+    try:
+        yield node
+    finally:
+        _local.stack.pop()

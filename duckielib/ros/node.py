@@ -1,0 +1,182 @@
+"""A node on the in-process graph, and the topic and service records the graph keeps.
+
+Node code never uses these classes directly: it calls rospy's functions
+(:mod:`duckielib.ros.rospy`), which find the calling node and act on it.
+"""
+
+from __future__ import annotations
+
+import traceback
+from typing import Any, Callable, Dict, List, Optional
+
+from duckielib.ros import names
+from duckielib.ros.exceptions import ROSException
+from duckielib.ros.graph import ERROR, INFO, Graph, node_context
+
+__all__ = ["Node", "TopicRecord", "ServiceRecord"]
+
+
+class TopicRecord:
+    """What the master knows of a topic: its type, publishers, subscribers, latched messages."""
+
+    def __init__(self, name: str, data_class: type) -> None:
+        self.name = name
+        self.data_class = data_class
+        self.publishers: List[Any] = []
+        self.subscribers: List[Any] = []
+        self.latched: Dict[Any, bytes] = {}
+        self.message_count = 0
+
+    @property
+    def type(self) -> str:
+        """The topic's message type, ``package/Type``."""
+        return self.data_class._type
+
+    def check_type(self, data_class: type, role: str, node: str) -> None:
+        """Refuse a publisher or subscriber whose message type differs from the topic's.
+
+        Raises:
+            ROSException: naming both types and who uses the topic.
+        """
+        if data_class._md5sum == self.data_class._md5sum and data_class._type == self.type:
+            return
+        users = sorted({item.node.name for item in self.publishers + self.subscribers})
+        raise ROSException(
+            f"Topic {self.name} carries {self.type} (used by {', '.join(users)}), so "
+            f"{node} cannot {role} it with {data_class._type}. Use the topic's type, "
+            "or another topic name."
+        )
+
+
+class ServiceRecord:
+    """What the master knows of a service: its type, handler and node."""
+
+    def __init__(
+        self,
+        name: str,
+        service_class: type,
+        handler: Callable[[Any], Any],
+        node: Node,
+        error_handler: Optional[Callable[..., Any]],
+    ) -> None:
+        self.name = name
+        self.service_class = service_class
+        self.handler = handler
+        self.node = node
+        self.error_handler = error_handler
+        self.call_count = 0
+
+    @property
+    def type(self) -> str:
+        """The service's type, ``package/Type``."""
+        return self.service_class._type
+
+
+class Node:
+    """A node registered on a graph: its name, namespace, connections and shutdown hooks.
+
+    Attributes:
+        name: the node's global name, for example ``/duckiebot/odometry_node``.
+        namespace: its namespace with slashes, for example ``/duckiebot/``.
+    """
+
+    def __init__(
+        self,
+        graph: Graph,
+        name: str,
+        namespace: str,
+        remappings: Optional[Dict[str, str]] = None,
+        log_level: int = INFO,
+        init_args: Optional[tuple] = None,
+    ) -> None:
+        self.graph = graph
+        self.namespace = names.normalize_namespace(namespace)
+        self.name = names.canonical(self.namespace + name)
+        self.remappings = dict(remappings or {})
+        self.log_level = log_level
+        self.init_args = init_args
+        self.publishers: List[Any] = []
+        self.subscribers: List[Any] = []
+        self.services: List[ServiceRecord] = []
+        self.timers: List[Any] = []
+        self.shutdown_hooks: List[Callable[[], Any]] = []
+        self.is_shutdown = False
+        self.shutdown_reason: Optional[str] = None
+        self._log_marks: Dict[Any, float] = {}
+
+    def __repr__(self) -> str:
+        return f"<Node {self.name}{' (shut down)' if self.is_shutdown else ''}>"
+
+    def resolve(self, name: str) -> str:
+        """Resolve a topic, service or parameter name as this node sees it."""
+        return names.resolve(name, self.namespace, self.name, self.remappings)
+
+    def resolve_param(self, name: str) -> str:
+        """Resolve a parameter name (parameters are not remapped)."""
+        return names.resolve(name, self.namespace, self.name)
+
+    # -- logging ----------------------------------------------------------------------------
+    def log(self, level: int, text: str) -> None:
+        """Log a line at ``level`` if the node's level lets it through."""
+        if level >= self.log_level:
+            self.graph.log_message(level, self.name, text)
+
+    def log_throttled(self, key: Any, period: float, level: int, text: str) -> None:
+        """Log at most once per ``period`` simulated seconds for the same call site."""
+        last = self._log_marks.get(key)
+        if last is None or self.graph.time - last >= period:
+            self._log_marks[key] = self.graph.time
+            self.log(level, text)
+
+    def log_once(self, key: Any, level: int, text: str) -> None:
+        """Log only the first time for the same call site."""
+        if key not in self._log_marks:
+            self._log_marks[key] = self.graph.time
+            self.log(level, text)
+
+    # -- connections ------------------------------------------------------------------------
+    def topic(self, name: str, data_class: type, role: str) -> TopicRecord:
+        """The record of topic ``name`` (created if new), after checking its type."""
+        record = self.graph.topics.get(name)
+        if record is None:
+            record = self.graph.topics[name] = TopicRecord(name, data_class)
+        else:
+            record.check_type(data_class, role, self.name)
+        return record
+
+    def forget_topic_user(self, record: TopicRecord) -> None:
+        """Drop the topic's record once nobody publishes or subscribes to it any more."""
+        unused = not record.publishers and not record.subscribers
+        if unused and self.graph.topics.get(record.name) is record:
+            del self.graph.topics[record.name]
+
+    # -- shutdown ---------------------------------------------------------------------------
+    def shutdown(self, reason: str) -> None:
+        """Shut the node down: run its hooks, then close its topics, services and timers."""
+        if self.is_shutdown:
+            return
+        self.is_shutdown = True
+        self.shutdown_reason = reason
+        with node_context(self):
+            for hook in list(self.shutdown_hooks):
+                try:
+                    hook()
+                except Exception as error:  # a broken hook must not stop the others
+                    self.log(
+                        ERROR,
+                        "shutdown hook failed:\n"
+                        + "".join(
+                            traceback.format_exception(type(error), error, error.__traceback__)
+                        ),
+                    )
+        for timer in list(self.timers):
+            timer.shutdown()
+        for publisher in list(self.publishers):
+            publisher.unregister()
+        for subscriber in list(self.subscribers):
+            subscriber.unregister()
+        for service in list(self.services):
+            if self.graph.services.get(service.name) is service:
+                del self.graph.services[service.name]
+        self.services.clear()
+        self.graph.remove_node(self)
