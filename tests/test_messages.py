@@ -50,6 +50,7 @@ PUBLISHED_MD5 = {
 PUBLISHED_SERVICE_MD5 = {
     "duckietown_msgs/ChangePattern": "678f2d65b1bda577ab0910fd9c7414ba",
     "duckietown_msgs/SetCustomLEDPattern": "80c491edc501f8f5b2f80aaecfd31b21",
+    "std_srvs/SetBool": "09fb03525b03e7ea1fd3992bafd87e16",
 }
 
 

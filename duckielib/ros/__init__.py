@@ -17,5 +17,14 @@ from __future__ import annotations
 
 from duckielib.ros import rospy
 from duckielib.ros.graph import Graph, LogRecord, NodeCrashed, default_graph
+from duckielib.ros.modules import install_modules, uninstall_modules
 
-__all__ = ["Graph", "LogRecord", "NodeCrashed", "default_graph", "rospy"]
+__all__ = [
+    "Graph",
+    "LogRecord",
+    "NodeCrashed",
+    "default_graph",
+    "install_modules",
+    "rospy",
+    "uninstall_modules",
+]

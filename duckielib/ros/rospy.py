@@ -379,6 +379,13 @@ def _check_data_class(data_class: Any, what: str) -> None:
         )
 
 
+def _check_dt_options(what: str, options: dict) -> None:
+    """Accept Duckietown's extra keywords (``dt_topic_type``, ``dt_help``...), refuse others."""
+    unknown = sorted(key for key in options if not key.startswith("dt_"))
+    if unknown:
+        raise TypeError(f"{what}() got an unexpected keyword argument {unknown[0]!r}")
+
+
 def _format(error: BaseException) -> str:
     return "".join(traceback.format_exception(type(error), error, error.__traceback__)).rstrip()
 
@@ -411,6 +418,8 @@ class Publisher:
         data_class: the message class, for example ``WheelsCmdStamped``.
         latch: keep the last message and give it to subscribers that connect later.
         queue_size: how many messages may wait to be sent (as rospy; give it explicitly).
+        **dt_options: Duckietown's keywords (``dt_topic_type``, ``dt_help``), accepted as on a
+            Duckiebot.
     """
 
     def __init__(
@@ -422,7 +431,9 @@ class Publisher:
         latch: bool = False,
         headers: Any = None,
         queue_size: Optional[int] = None,
+        **dt_options: Any,
     ) -> None:
+        _check_dt_options("rospy.Publisher", dt_options)
         _check_data_class(data_class, "rospy.Publisher")
         self._node: Node = current_node("rospy.Publisher")
         self.resolved_name = self.name = self._node.resolve(name)
@@ -498,6 +509,7 @@ class Subscriber:
         callback_args: an extra argument passed to the callback.
         queue_size: how many messages may wait for the callback; when full, the oldest is
             dropped (None: no limit).
+        **dt_options: Duckietown's keywords (``dt_topic_type``, ``dt_help``).
     """
 
     def __init__(
@@ -509,7 +521,9 @@ class Subscriber:
         queue_size: Optional[int] = None,
         buff_size: int = 65536,
         tcp_nodelay: bool = False,
+        **dt_options: Any,
     ) -> None:
+        _check_dt_options("rospy.Subscriber", dt_options)
         _check_data_class(data_class, "rospy.Subscriber")
         self._node: Node = current_node("rospy.Subscriber")
         self.resolved_name = self.name = self._node.resolve(name)
