@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from duckielib.ros import rospy
 from duckielib.ros.graph import Graph, LogRecord, NodeCrashed, default_graph
+from duckielib.ros.introspect import rosmsg, rosnode, rosparam, rosservice, rossrv, rostopic
 from duckielib.ros.modules import install_modules, uninstall_modules
 
 __all__ = [
@@ -25,6 +26,12 @@ __all__ = [
     "NodeCrashed",
     "default_graph",
     "install_modules",
+    "rosmsg",
+    "rosnode",
+    "rosparam",
     "rospy",
+    "rosservice",
+    "rossrv",
+    "rostopic",
     "uninstall_modules",
 ]
