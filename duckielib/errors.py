@@ -14,6 +14,7 @@ __all__ = [
     "MessageDefinitionError",
     "UnknownTypeError",
     "NotBuiltError",
+    "SimulationError",
 ]
 
 
@@ -46,3 +47,7 @@ class UnknownTypeError(DuckielibError, KeyError):
 
 class NotBuiltError(DuckielibError):
     """A part of the course that is asked for does not exist yet."""
+
+
+class SimulationError(DuckielibError):
+    """The simulator was asked for something it cannot do, such as driving with a NaN duty cycle."""

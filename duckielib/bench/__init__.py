@@ -21,6 +21,10 @@ BENCHMARKS: Dict[str, Tuple[str, str]] = {
         "duckielib.bench.messages",
         "build, serialize and read back the course's messages",
     ),
+    "sim": (
+        "duckielib.bench.sim",
+        "real-time factor of the simulator alone (60 s drive, encoders and LEDs on)",
+    ),
 }
 
 Figure = Tuple[str, str]

@@ -11,15 +11,18 @@ import pytest
 DEBIAN_DIST_PACKAGES = "/usr/lib/python3/dist-packages"
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def ros_import():
     """Import a module of Debian's ROS 1 packages, or skip saying how to install them.
 
     The folder is appended at the end of ``sys.path`` so the project's own packages keep
-    priority, as the ROS backend does.
+    priority, as the ROS backend does. Afterwards the path and every module loaded from it
+    are removed again, so other tests never meet the real rospy by accident.
     """
-    if DEBIAN_DIST_PACKAGES not in sys.path:
+    added = DEBIAN_DIST_PACKAGES not in sys.path
+    if added:
         sys.path.append(DEBIAN_DIST_PACKAGES)
+    before = set(sys.modules)
 
     def load(name: str):
         try:
@@ -27,4 +30,9 @@ def ros_import():
         except ImportError as error:
             pytest.skip(f"Debian's ROS 1 packages are not installed ({error}); run `make ros`.")
 
-    return load
+    yield load
+    for name in set(sys.modules) - before:
+        if (getattr(sys.modules[name], "__file__", None) or "").startswith(DEBIAN_DIST_PACKAGES):
+            del sys.modules[name]
+    if added:
+        sys.path.remove(DEBIAN_DIST_PACKAGES)

@@ -39,7 +39,8 @@ class StraightNode(DTROS):
 
 @pytest.fixture
 def robot_imports():
-    installed = modules.install_modules()
+    # Replace even a real ROS on the path: these tests are about the in-process graph.
+    installed = modules.install_modules(replace_real=True)
     yield installed
     modules.uninstall_modules()
 

@@ -1,0 +1,115 @@
+"""The robot's camera: 640x480 JPEG frames of the mat ahead of the robot.
+
+The rendering is deliberately simple: a top-down view of the mat, centred on the robot's
+heading and rotated with it, so the image's top is straight ahead and its bottom edge lies just
+in front of the bumper. Tiles are dark grey in a checkerboard of two shades, tile borders are
+light lines, walls are brown and anything beyond them is black. Frames change as the robot
+moves and their JPEG size changes from frame to frame, as on the real robot.
+
+Pillow is imported here only, and only when a frame is encoded.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from typing import Tuple
+
+import numpy as np
+
+from duckielib.sim.world import WALL_THICKNESS, World
+
+__all__ = ["Camera", "CAMERA_RATE_HZ", "IMAGE_WIDTH", "IMAGE_HEIGHT"]
+
+#: Frames per second the camera produces at most.
+CAMERA_RATE_HZ = 30.0
+
+#: Image width, in pixels.
+IMAGE_WIDTH = 640
+
+#: Image height, in pixels.
+IMAGE_HEIGHT = 480
+
+_TILE_DARK = np.array([52, 52, 56], dtype=np.uint8)
+_TILE_LIGHT = np.array([68, 68, 72], dtype=np.uint8)
+_LINE = np.array([225, 225, 215], dtype=np.uint8)
+_WALL = np.array([150, 110, 70], dtype=np.uint8)
+_BEYOND = np.array([10, 10, 12], dtype=np.uint8)
+_FLOOR = np.array([130, 120, 105], dtype=np.uint8)
+
+
+class Camera:
+    """Renders what the robot's camera sees.
+
+    Args:
+        world: the mat to render.
+        view_width_m: width of the ground seen across the image, in metres.
+        near_m: distance from the axle to the ground seen at the image's bottom edge, in metres.
+        line_width_m: width of the tile border lines, in metres.
+        rate_hz: frames per second the camera produces at most.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        view_width_m: float = 1.2,
+        near_m: float = 0.08,
+        line_width_m: float = 0.02,
+        rate_hz: float = CAMERA_RATE_HZ,
+    ) -> None:
+        self.world = world
+        self.rate_hz = rate_hz
+        self.line_width_m = line_width_m
+        metres_per_pixel = view_width_m / IMAGE_WIDTH
+        rows = np.arange(IMAGE_HEIGHT, dtype=np.float64)
+        cols = np.arange(IMAGE_WIDTH, dtype=np.float64)
+        # Robot-frame coordinates of each pixel's centre: forward grows upwards in the image,
+        # left grows to the left.
+        forward = near_m + (IMAGE_HEIGHT - 0.5 - rows) * metres_per_pixel
+        left = (IMAGE_WIDTH / 2 - 0.5 - cols) * metres_per_pixel
+        self._forward, self._left = np.meshgrid(forward, left, indexing="ij")
+
+    def pixels_in_world(self, pose: Tuple[float, float, float]) -> Tuple[np.ndarray, np.ndarray]:
+        """World coordinates (x, y) of every pixel's ground point, each shape (480, 640), in m."""
+        x, y, theta = pose
+        cos_t, sin_t = math.cos(theta), math.sin(theta)
+        world_x = x + cos_t * self._forward - sin_t * self._left
+        world_y = y + sin_t * self._forward + cos_t * self._left
+        return world_x, world_y
+
+    def render(self, pose: Tuple[float, float, float]) -> np.ndarray:
+        """The image seen from ``pose`` (x, y, theta): RGB, shape (480, 640, 3), dtype uint8."""
+        world = self.world
+        world_x, world_y = self.pixels_in_world(pose)
+        size = world.tile_size
+        tile_i = np.floor(world_x / size)
+        tile_j = np.floor(world_y / size)
+        image = np.where(((tile_i + tile_j) % 2 == 0)[..., None], _TILE_DARK, _TILE_LIGHT)
+        half_line = self.line_width_m / 2
+        offset_x = np.abs(world_x - np.round(world_x / size) * size)
+        offset_y = np.abs(world_y - np.round(world_y / size) * size)
+        image[(offset_x < half_line) | (offset_y < half_line)] = _LINE
+        outside = (world_x < 0) | (world_x > world.width) | (world_y < 0) | (world_y > world.height)
+        if world.walls:
+            beyond = (
+                (world_x < -WALL_THICKNESS)
+                | (world_x > world.width + WALL_THICKNESS)
+                | (world_y < -WALL_THICKNESS)
+                | (world_y > world.height + WALL_THICKNESS)
+            )
+            image[outside] = _WALL
+            image[beyond] = _BEYOND
+        else:
+            image[outside] = _FLOOR
+        return image
+
+    @staticmethod
+    def encode_jpeg(image: np.ndarray, quality: int = 80) -> bytes:
+        """``image`` (RGB, shape (H, W, 3), uint8) as JPEG bytes."""
+        from PIL import Image
+
+        buffer = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(
+            buffer, format="JPEG", quality=quality
+        )
+        return buffer.getvalue()

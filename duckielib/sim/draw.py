@@ -1,0 +1,328 @@
+"""Drawing the virtual Duckiebot with matplotlib: the mat, the robot and its LEDs, its paths.
+
+This is the simulator's only module that imports matplotlib, and the simulator imports it only
+when asked to draw. Everything is drawn in the world frame, in metres, seen from above, with
+equal scales on both axes.
+
+- :func:`plot_run`: a figure of a run: the mat, the true path, the robot where it ended, and an
+  estimated path (for example from odometry) when given.
+- :func:`animate_run`: the same as an animation; :func:`animation_html` turns it into HTML
+  that plays inline in a notebook, :func:`save_animation` writes a GIF (with Pillow) or an MP4
+  (when ffmpeg is installed).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+from matplotlib import animation, patches
+from matplotlib import pyplot as plt
+
+from duckielib.config import RobotConfig
+from duckielib.errors import SimulationError
+from duckielib.sim.robot import AXLE_TO_FRONT_FRACTION
+from duckielib.sim.world import WALL_THICKNESS, World
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from duckielib.sim.simulator import Simulator
+
+__all__ = [
+    "draw_mat",
+    "draw_robot",
+    "plot_run",
+    "animate_run",
+    "animation_html",
+    "save_animation",
+]
+
+RGB = Tuple[float, float, float]
+
+_TILE_COLORS = ("#3a3a3e", "#48484d")
+_LINE_COLOR = "#e8e8dc"
+_WALL_COLOR = "#966e46"
+_TRUE_COLOR = "#1f77b4"
+_ESTIMATE_COLOR = "#ff7f0e"
+_LED_RADIUS = 0.012
+
+
+def draw_mat(ax: Axes, world: World) -> None:
+    """Draw the mat's tiles, their borders and the walls on ``ax``, and fit the view to them."""
+    size = world.tile_size
+    for i in range(world.tiles_x):
+        for j in range(world.tiles_y):
+            ax.add_patch(
+                patches.Rectangle(
+                    (i * size, j * size),
+                    size,
+                    size,
+                    facecolor=_TILE_COLORS[(i + j) % 2],
+                    edgecolor="none",
+                    zorder=0,
+                )
+            )
+    for start, end in world.grid_lines():
+        ax.plot((start[0], end[0]), (start[1], end[1]), color=_LINE_COLOR, linewidth=1.5, zorder=1)
+    margin = 0.05
+    if world.walls:
+        ax.add_patch(
+            patches.Rectangle(
+                (-WALL_THICKNESS / 2, -WALL_THICKNESS / 2),
+                world.width + WALL_THICKNESS,
+                world.height + WALL_THICKNESS,
+                fill=False,
+                edgecolor=_WALL_COLOR,
+                linewidth=4,
+                zorder=1,
+            )
+        )
+    ax.set_xlim(-margin, world.width + margin)
+    ax.set_ylim(-margin, world.height + margin)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+
+
+def _chassis_outline(config: RobotConfig) -> np.ndarray:
+    front = AXLE_TO_FRONT_FRACTION * config.chassis_length
+    rear = front - config.chassis_length
+    half = config.chassis_width / 2
+    nose = front + 0.02
+    return np.array([(front, half), (rear, half), (rear, -half), (front, -half), (nose, 0.0)])
+
+
+def _wheel_outline(config: RobotConfig, side: float) -> np.ndarray:
+    y = side * config.baseline / 2
+    half_width = 0.011
+    return np.array(
+        [
+            (config.radius, y + half_width),
+            (-config.radius, y + half_width),
+            (-config.radius, y - half_width),
+            (config.radius, y - half_width),
+        ]
+    )
+
+
+def _led_positions(config: RobotConfig) -> np.ndarray:
+    """Robot-frame (x, y) of the five LEDs, by index, in metres."""
+    front = AXLE_TO_FRONT_FRACTION * config.chassis_length - 0.015
+    rear = front - config.chassis_length + 0.03
+    side = config.chassis_width / 2 - 0.015
+    return np.array(
+        [(front, side), (rear, side), (front - 0.03, 0.0), (rear, -side), (front, -side)]
+    )
+
+
+def _to_world(points: np.ndarray, pose: Sequence[float]) -> np.ndarray:
+    x, y, theta = pose
+    cos_t, sin_t = math.cos(theta), math.sin(theta)
+    rotation = np.array([[cos_t, -sin_t], [sin_t, cos_t]])
+    return points @ rotation.T + np.array([x, y])
+
+
+class _RobotArtist:
+    """The patches of one drawn robot, movable from pose to pose."""
+
+    def __init__(self, ax: Axes, config: RobotConfig) -> None:
+        self.config = config
+        self.chassis_local = _chassis_outline(config)
+        self.wheels_local = [_wheel_outline(config, 1.0), _wheel_outline(config, -1.0)]
+        self.leds_local = _led_positions(config)
+        self.chassis = patches.Polygon(
+            self.chassis_local, closed=True, facecolor="#f2c200", edgecolor="black", zorder=4
+        )
+        self.wheels = [
+            patches.Polygon(w, closed=True, facecolor="#222222", edgecolor="none", zorder=5)
+            for w in self.wheels_local
+        ]
+        self.leds = [
+            patches.Circle((0.0, 0.0), _LED_RADIUS, edgecolor="black", linewidth=0.5, zorder=6)
+            for _ in range(len(self.leds_local))
+        ]
+        for artist in (self.chassis, *self.wheels, *self.leds):
+            ax.add_patch(artist)
+
+    def update(self, pose: Sequence[float], led_colors: Optional[Sequence[RGB]]) -> List[object]:
+        self.chassis.set_xy(_to_world(self.chassis_local, pose))
+        for patch, local in zip(self.wheels, self.wheels_local):
+            patch.set_xy(_to_world(local, pose))
+        centres = _to_world(self.leds_local, pose)
+        colors = led_colors if led_colors is not None else [(0.0, 0.0, 0.0)] * len(self.leds)
+        for patch, centre, color in zip(self.leds, centres, colors):
+            patch.set_center((float(centre[0]), float(centre[1])))
+            patch.set_facecolor(tuple(float(c) for c in color))
+        return [self.chassis, *self.wheels, *self.leds]
+
+
+def draw_robot(
+    ax: Axes,
+    pose: Sequence[float],
+    config: RobotConfig,
+    led_colors: Optional[Sequence[RGB]] = None,
+) -> List[object]:
+    """Draw the robot at ``pose`` (x, y, theta in metres and radians) with its LEDs.
+
+    Args:
+        ax: the axes to draw on.
+        pose: where the robot is.
+        config: the robot (chassis size, wheel radius, baseline).
+        led_colors: the five LEDs' RGB colours in [0, 1], by index; black when None.
+
+    Returns:
+        The matplotlib patches drawn.
+    """
+    return _RobotArtist(ax, config).update(pose, led_colors)
+
+
+def _estimate_xy(estimate: Optional[object]) -> Optional[np.ndarray]:
+    if estimate is None:
+        return None
+    points = np.asarray(estimate, dtype=float)
+    if points.ndim != 2 or points.shape[1] not in (2, 3):
+        raise SimulationError(
+            f"An estimated path must have shape (N, 2) or (N, 3) (x, y and theta), not "
+            f"{points.shape}."
+        )
+    return points[:, :2]
+
+
+def plot_run(sim: Simulator, estimate: Optional[object] = None, ax: Optional[Axes] = None) -> Axes:
+    """Draw a run: the mat, the true path, the robot now with its LEDs, and an estimate.
+
+    Args:
+        sim: the simulator whose recorded run to draw.
+        estimate: an estimated path, shape (N, 2) or (N, 3): x, y in metres (and theta).
+        ax: the axes to draw on; a new figure when None.
+
+    Returns:
+        The axes drawn on.
+
+    Raises:
+        SimulationError: if ``estimate`` does not have the right shape.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 6))
+    draw_mat(ax, sim.world)
+    poses = sim.trace.poses()
+    if len(poses):
+        ax.plot(poses[:, 0], poses[:, 1], color=_TRUE_COLOR, linewidth=2, label="true", zorder=3)
+    points = _estimate_xy(estimate)
+    if points is not None:
+        ax.plot(
+            points[:, 0],
+            points[:, 1],
+            color=_ESTIMATE_COLOR,
+            linewidth=2,
+            linestyle="--",
+            label="estimate",
+            zorder=3,
+        )
+    draw_robot(ax, sim.pose, sim.config, sim.leds.colors)
+    ax.set_title(f"t = {sim.time:.2f} s")
+    ax.legend(loc="upper right")
+    return ax
+
+
+def animate_run(
+    sim: Simulator,
+    estimate: Optional[object] = None,
+    fps: float = 15.0,
+    speed: float = 1.0,
+    max_frames: int = 300,
+) -> animation.FuncAnimation:
+    """An animation of the recorded run: the robot with its LEDs moving along its true path.
+
+    Args:
+        sim: the simulator whose recorded run to animate (its trace).
+        estimate: an estimated path, shape (N, 2) or (N, 3), drawn growing with the run
+            (its samples are taken as evenly spread over the run's duration).
+        fps: frames per second of the animation.
+        speed: simulated seconds per second of animation.
+        max_frames: the most frames to draw (the run is sampled more sparsely if needed).
+
+    Returns:
+        The animation; show it in a notebook with :func:`animation_html`.
+
+    Raises:
+        SimulationError: if nothing was recorded or ``estimate`` has the wrong shape.
+    """
+    trace = sim.trace
+    if len(trace) == 0:
+        raise SimulationError(
+            "There is no recorded run to animate; create the Simulator with trace_rate_hz > 0 "
+            "and run it first."
+        )
+    times = np.asarray(trace.times)
+    poses = trace.poses()
+    points = _estimate_xy(estimate)
+    duration = times[-1] - times[0]
+    count = int(min(max_frames, max(1, math.ceil(duration / speed * fps) + 1), len(times)))
+    indices = np.unique(np.linspace(0, len(times) - 1, count).round().astype(int))
+
+    fig, ax = plt.subplots(figsize=(6, 6))
+    draw_mat(ax, sim.world)
+    (true_line,) = ax.plot([], [], color=_TRUE_COLOR, linewidth=2, label="true", zorder=3)
+    estimate_line = None
+    if points is not None:
+        (estimate_line,) = ax.plot(
+            [], [], color=_ESTIMATE_COLOR, linewidth=2, linestyle="--", label="estimate", zorder=3
+        )
+    robot = _RobotArtist(ax, sim.config)
+    title = ax.set_title("")
+    ax.legend(loc="upper right")
+
+    def frame(number: int) -> List[object]:
+        index = int(indices[number])
+        true_line.set_data(poses[: index + 1, 0], poses[: index + 1, 1])
+        artists: List[object] = [true_line, title]
+        if estimate_line is not None and points is not None:
+            fraction = 1.0 if duration <= 0 else (times[index] - times[0]) / duration
+            shown = max(1, math.ceil(fraction * len(points)))
+            estimate_line.set_data(points[:shown, 0], points[:shown, 1])
+            artists.append(estimate_line)
+        title.set_text(f"t = {times[index]:.2f} s")
+        artists.extend(robot.update(poses[index], trace.led_colors_at(float(times[index]))))
+        return artists
+
+    anim = animation.FuncAnimation(
+        fig, frame, frames=len(indices), interval=1000.0 / fps, blit=False
+    )
+    plt.close(fig)
+    return anim
+
+
+def animation_html(anim: animation.FuncAnimation) -> str:
+    """The animation as self-contained HTML (JavaScript player) that plays inline in Jupyter."""
+    return anim.to_jshtml()
+
+
+def save_animation(
+    anim: animation.FuncAnimation, path: Union[str, Path], fps: float = 15.0
+) -> Path:
+    """Write the animation to ``path``: ``.gif`` (needs Pillow) or ``.mp4`` (needs ffmpeg).
+
+    Raises:
+        SimulationError: if the suffix is neither, or no writer for it is installed.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".gif":
+        writer: animation.AbstractMovieWriter = animation.PillowWriter(fps=fps)
+    elif suffix == ".mp4":
+        if not animation.writers.is_available("ffmpeg"):
+            raise SimulationError(
+                "Saving an MP4 needs ffmpeg, which is not installed; install it (for example "
+                "`apt install ffmpeg`) or save a .gif instead."
+            )
+        writer = animation.FFMpegWriter(fps=fps)
+    else:
+        raise SimulationError(
+            f"Cannot save an animation as {path.name!r}; use a .gif or .mp4 file name."
+        )
+    anim.save(str(path), writer=writer)
+    return path
