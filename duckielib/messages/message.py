@@ -363,10 +363,7 @@ class Message:
         Raises:
             MessageError: if a field holds a value its type cannot carry.
         """
-        self._check_types()
-        out = bytearray()
-        self._write(out)
-        buff.write(bytes(out))
+        buff.write(self.to_bytes())
 
     def to_bytes(self) -> bytes:
         """The message in ROS 1's wire format, as stored in a bag."""

@@ -113,13 +113,7 @@ class _Actor:
         except BaseException as error:
             self.error = error
             node_name = self.node.name if self.node is not None else self.thread.name[5:]
-            self.graph._log(
-                ERROR,
-                node_name,
-                "".join(
-                    traceback.format_exception(type(error), error, error.__traceback__)
-                ).rstrip(),
-            )
+            self.graph.log_message(ERROR, node_name, format_error(error))
         finally:
             self.finished = True
             if self.node is not None and not self.node.is_shutdown:
@@ -490,7 +484,8 @@ class Graph:
         return sorted(found)
 
     # -- logging ----------------------------------------------------------------------------
-    def _log(self, level: int, node: str, text: str) -> None:
+    def log_message(self, level: int, node: str, text: str) -> None:
+        """Record a log line of ``node`` and print it (info to stdout, warnings to stderr)."""
         record = LogRecord(self.time, level, node, text)
         self.log.append(record)
         if not self.echo_logs:
@@ -498,9 +493,10 @@ class Graph:
         stream = (self.stdout or sys.stdout) if level <= INFO else (self.stderr or sys.stderr)
         print(f"[{LEVEL_NAMES[level]}] [{self.time:.3f}] [{node}]: {text}", file=stream)
 
-    def log_message(self, level: int, node: str, text: str) -> None:
-        """Record a log line of ``node`` and print it (info to stdout, warnings to stderr)."""
-        self._log(level, node, text)
+
+def format_error(error: BaseException) -> str:
+    """An exception with its traceback, as Python prints it, for the log."""
+    return "".join(traceback.format_exception(type(error), error, error.__traceback__)).rstrip()
 
 
 def _copy_tree(value: Any) -> Any:

@@ -18,7 +18,7 @@ Results are ordinary Python values (lists and strings) that display as the termi
 from __future__ import annotations
 
 import math
-from typing import Any, List, Optional
+from typing import Any, Callable, List, Optional
 
 from duckielib import messages
 from duckielib.errors import UnknownTypeError
@@ -76,6 +76,27 @@ def _topic(graph: Graph, name: str) -> Any:
     return record
 
 
+def _listen(
+    graph: Graph, topic: str, callback: Callable[[Message], Any], run: Callable[[], Any]
+) -> Any:
+    """Subscribe a ``rostopic`` tool node to ``topic``, call ``run()``, then remove the node.
+
+    Returns:
+        The topic's record.
+    """
+    from duckielib.ros.rospy import Subscriber
+
+    record = _topic(graph, topic)
+    node = _tool_node(graph, "rostopic")
+    with node_context(node):
+        Subscriber(record.name, record.data_class, callback)
+    try:
+        run()
+    finally:
+        node.shutdown("rostopic finished")
+    return record
+
+
 def _expand(full_name: str, indent: str = "") -> List[str]:
     """A message's fields, nested types expanded, as ``rosmsg show`` prints them."""
     spec = messages.REGISTRY.message(full_name)
@@ -126,18 +147,14 @@ class rostopic:  # noqa: N801 - named after the command
         Raises:
             ROSException: if fewer messages arrive before the timeout.
         """
-        from duckielib.ros.rospy import Subscriber
-
         graph = _graph(graph)
-        record = _topic(graph, topic)
         received: List[Message] = []
-        node = _tool_node(graph, "rostopic")
-        with node_context(node):
-            Subscriber(record.name, record.data_class, received.append)
-        try:
-            graph.run_until(lambda: len(received) >= count, timeout)
-        finally:
-            node.shutdown("rostopic echo finished")
+        record = _listen(
+            graph,
+            topic,
+            received.append,
+            lambda: graph.run_until(lambda: len(received) >= count, timeout),
+        )
         if len(received) < count:
             raise ROSException(
                 f"Only {len(received)} of {count} messages arrived on {record.name} within "
@@ -148,18 +165,11 @@ class rostopic:  # noqa: N801 - named after the command
     @staticmethod
     def hz(topic: str, duration: float = 2.0, graph: Optional[Graph] = None) -> Printout:
         """Measure how often messages arrive on a topic, over ``duration`` simulated seconds."""
-        from duckielib.ros.rospy import Subscriber
-
         graph = _graph(graph)
-        record = _topic(graph, topic)
         arrivals: List[float] = []
-        node = _tool_node(graph, "rostopic")
-        with node_context(node):
-            Subscriber(record.name, record.data_class, lambda _: arrivals.append(graph.time))
-        try:
-            graph.run(duration)
-        finally:
-            node.shutdown("rostopic hz finished")
+        record = _listen(
+            graph, topic, lambda _: arrivals.append(graph.time), lambda: graph.run(duration)
+        )
         if len(arrivals) < 2:
             return Printout(f"no new messages on {record.name} in {duration} s")
         gaps = [later - earlier for earlier, later in zip(arrivals, arrivals[1:])]

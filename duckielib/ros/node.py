@@ -6,12 +6,11 @@ Node code never uses these classes directly: it calls rospy's functions
 
 from __future__ import annotations
 
-import traceback
 from typing import Any, Callable, Dict, List, Optional
 
 from duckielib.ros import names
 from duckielib.ros.exceptions import ROSException
-from duckielib.ros.graph import ERROR, INFO, Graph, node_context
+from duckielib.ros.graph import ERROR, INFO, Graph, format_error, node_context
 
 __all__ = ["Node", "TopicRecord", "ServiceRecord"]
 
@@ -162,13 +161,7 @@ class Node:
                 try:
                     hook()
                 except Exception as error:  # a broken hook must not stop the others
-                    self.log(
-                        ERROR,
-                        "shutdown hook failed:\n"
-                        + "".join(
-                            traceback.format_exception(type(error), error, error.__traceback__)
-                        ),
-                    )
+                    self.log(ERROR, "shutdown hook failed:\n" + format_error(error))
         for timer in list(self.timers):
             timer.shutdown()
         for publisher in list(self.publishers):

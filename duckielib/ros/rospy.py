@@ -24,7 +24,6 @@ from __future__ import annotations
 import collections
 import os
 import sys
-import traceback
 from typing import Any, Callable, Deque, List, Optional, Union
 
 from duckielib import rostime
@@ -49,6 +48,7 @@ from duckielib.ros.graph import (
     WARN,
     current_graph,
     current_node,
+    format_error,
     node_context,
 )
 from duckielib.ros.node import Node, ServiceRecord, TopicRecord
@@ -259,7 +259,7 @@ class Timer:
             try:
                 self._callback(event)
             except Exception as error:
-                self._node.log(ERROR, "bad timer callback:\n" + _format(error))
+                self._node.log(ERROR, "bad timer callback:\n" + format_error(error))
         if self._oneshot or self._node.is_shutdown or self._event is None:
             self.shutdown()
             return
@@ -384,10 +384,6 @@ def _check_dt_options(what: str, options: dict) -> None:
     unknown = sorted(key for key in options if not key.startswith("dt_"))
     if unknown:
         raise TypeError(f"{what}() got an unexpected keyword argument {unknown[0]!r}")
-
-
-def _format(error: BaseException) -> str:
-    return "".join(traceback.format_exception(type(error), error, error.__traceback__)).rstrip()
 
 
 def _to_message(data_class: type, args: tuple, kwds: dict) -> Any:
@@ -564,7 +560,7 @@ class Subscriber:
                     else:
                         self.callback(message, self.callback_args)
                 except Exception as error:
-                    self._node.log(ERROR, f"bad callback on {self.name}:\n{_format(error)}")
+                    self._node.log(ERROR, f"bad callback on {self.name}:\n{format_error(error)}")
 
     def get_num_connections(self) -> int:
         """How many publishers the topic has."""
@@ -737,7 +733,9 @@ class ServiceProxy:
                 if record.error_handler is not None:
                     record.error_handler(error, type(error), error, error.__traceback__)
                 else:
-                    record.node.log(ERROR, f"Error processing request: {error}\n{_format(error)}")
+                    record.node.log(
+                        ERROR, f"Error processing request: {error}\n{format_error(error)}"
+                    )
                 raise ServiceException(f"error processing request: {error}") from None
         return self.response_class.from_bytes(data)
 
