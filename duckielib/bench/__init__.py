@@ -21,6 +21,10 @@ BENCHMARKS: Dict[str, Tuple[str, str]] = {
         "duckielib.bench.messages",
         "build, serialize and read back the course's messages",
     ),
+    "graph": (
+        "duckielib.bench.graph",
+        "real-time factor of the virtual Duckiebot with a controller and a listener node",
+    ),
     "sim": (
         "duckielib.bench.sim",
         "real-time factor of the simulator alone (60 s drive, encoders and LEDs on)",

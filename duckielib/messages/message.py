@@ -75,6 +75,9 @@ class _Codec:
 
 
 def _is_real(value: Any) -> bool:
+    kind = type(value)
+    if kind is float or kind is int:  # the common case, without the slower ABC check
+        return True
     return isinstance(value, Real) and not isinstance(value, bool)
 
 
@@ -91,6 +94,8 @@ def _integer_codec(type_name: str) -> _Codec:
     packer = struct.Struct("<" + _INTEGER_FORMATS[type_name])
 
     def check(value: Any) -> bool:
+        if type(value) is int:  # the common case, without the slower ABC check
+            return low <= value <= high
         return isinstance(value, Integral) and not isinstance(value, bool) and low <= value <= high
 
     def write(out: bytearray, value: Any) -> None:

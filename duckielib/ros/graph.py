@@ -393,6 +393,26 @@ class Graph:
         else:
             self._foreground[threading.get_ident()] = node
 
+    def host_node(self, name: str, namespace: str = "/") -> Any:
+        """Register a node whose work is all done in callbacks, with no main code to run.
+
+        The robot's drivers are such nodes. Create their publishers, subscribers and services
+        inside ``node_context(node)``; the node lives until it or the graph shuts down.
+
+        Raises:
+            ValueError: if ``name`` is not a legal base name.
+        """
+        from duckielib.ros.node import Node
+
+        if not names.is_legal_base_name(name):
+            raise ValueError(f"{name!r} is not a legal node name: use letters, digits and '_'.")
+        node = Node(self, name, namespace)
+        old = self.nodes.get(node.name)
+        if old is not None and not old.is_shutdown:
+            old.shutdown("a new node registered with the same name")
+        self.nodes[node.name] = node
+        return node
+
     def remove_node(self, node: Any) -> None:
         """Forget a node that shut down.
 

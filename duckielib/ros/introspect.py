@@ -18,7 +18,7 @@ Results are ordinary Python values (lists and strings) that display as the termi
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from duckielib import messages
 from duckielib.errors import UnknownTypeError
@@ -95,6 +95,22 @@ def _listen(
     finally:
         node.shutdown("rostopic finished")
     return record
+
+
+def _nested_messages(message_class: type, fields: Dict[str, Any]) -> Dict[str, Any]:
+    """``fields`` with dicts given for message-typed fields turned into those messages.
+
+    ``rosservice call`` takes YAML such as ``pattern_name: {data: RED}``; here the same is
+    ``pattern_name={"data": "RED"}``.
+    """
+    types = dict(zip(message_class.__slots__, message_class._slot_types))
+    converted = dict(fields)
+    for key, value in fields.items():
+        slot_type = types.get(key, "")
+        if isinstance(value, dict) and "/" in slot_type and not slot_type.endswith("]"):
+            nested = messages.get_message_class(slot_type)
+            converted[key] = nested(**_nested_messages(nested, value))
+    return converted
 
 
 def _expand(full_name: str, indent: str = "") -> List[str]:
@@ -238,6 +254,8 @@ class rosservice:  # noqa: N801
         node = _tool_node(graph, "rosservice")
         try:
             with node_context(node):
+                request = record.service_class._request_class
+                fields = _nested_messages(request, fields)
                 response = ServiceProxy(record.name, record.service_class)(*args, **fields)
         finally:
             node.shutdown("rosservice call finished")

@@ -7,6 +7,8 @@ unsynchronised schedules with the driver's sign rule. Ground truth comes from th
 
 Modules (one idea each):
     simulator: :class:`Simulator`, the robot in its world, and its clock.
+    duckiebot: :class:`VirtualDuckiebot`, the simulator with its driver nodes on a ROS graph.
+    drivers: the robot's driver nodes (wheels, encoders, kinematics, LEDs, camera).
     world: the mat grid and its walls (:class:`World`), the pymunk space in metres.
     robot: chassis, wheels and motors (:class:`Pose`, :class:`Twist`, :func:`pwm_from_duty`).
     encoders: the wheel encoders (:class:`EncoderReading`).
@@ -27,6 +29,7 @@ Example::
 
 from __future__ import annotations
 
+from duckielib.sim.duckiebot import VirtualDuckiebot
 from duckielib.sim.encoders import EncoderReading
 from duckielib.sim.noise import NoiseProfile, noise_profile
 from duckielib.sim.robot import Pose, Twist, pwm_from_duty
@@ -35,6 +38,7 @@ from duckielib.sim.world import World
 
 __all__ = [
     "Simulator",
+    "VirtualDuckiebot",
     "World",
     "NoiseProfile",
     "noise_profile",

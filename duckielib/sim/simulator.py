@@ -386,6 +386,10 @@ class Simulator:
         """
         self._show_pattern(led_tables.custom_pattern(color_list, frequency, frequency_mask))
 
+    def show_led_pattern(self, pattern: led_tables.Pattern) -> None:
+        """Show a pattern already checked (what the LED emitter node sends to the LEDs)."""
+        self._show_pattern(pattern)
+
     def _show_pattern(self, pattern: led_tables.Pattern) -> None:
         self._pattern = pattern
         self._pattern_since = self.time
