@@ -27,6 +27,75 @@ def _bench(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bag_info(args: argparse.Namespace) -> int:
+    from duckielib.bags import Bag
+
+    print(Bag(args.bag).info())
+    return 0
+
+
+def _bag_plot(args: argparse.Namespace) -> int:
+    from duckielib.bags import Bag, pose_tracks
+    from duckielib.errors import BagError
+
+    bag = Bag(args.bag)
+    tracks = pose_tracks(bag, args.time_base)
+    if args.topic:
+        tracks = [track for track in tracks if track.label in args.topic]
+        for topic in args.topic:
+            bag.topic(topic)
+    if not tracks:
+        raise BagError(
+            f"{bag.path.name} has no topic of type duckietown_msgs/Pose2DStamped to plot; "
+            "for a bag of encoder ticks, compute the poses with 'duckie bag odometry'."
+        )
+    from duckielib import plots
+
+    figure = plots.pose_figure(tracks, title=bag.path.name)
+    print(f"Wrote {plots.save_figure(figure, args.output)}.")
+    return 0
+
+
+def _bag_odometry(args: argparse.Namespace) -> int:
+    import json
+
+    from duckielib.bags import Bag, replay_odometry
+    from duckielib.solution import SolutionError, load_solution
+
+    if args.solution is None:
+        raise SolutionError(
+            "Give your odometry with --solution FILE.py (a module with delta_phi and "
+            "estimate_pose): the course's reference solution is not exported yet."
+        )
+    solution = load_solution(args.solution)
+    bag = Bag(args.bag)
+    track = replay_odometry(
+        bag,
+        solution.delta_phi,
+        solution.estimate_pose,
+        start=args.start,
+        left_topic=args.left,
+        right_topic=args.right,
+        time_base=args.time_base,
+    )
+    x, y, theta = track.final_pose
+    if args.json:
+        print(json.dumps({"x": x, "y": y, "theta": theta}))
+        return 0
+    for note in track.notes:
+        print(f"note: {note}")
+    print(f"{len(track)} poses from {track.t[0]:.3f} s to {track.t[-1]:.3f} s.")
+    print(f"final pose: x = {x:.4f} m, y = {y:.4f} m, theta = {theta:.4f} rad")
+    return 0
+
+
+def _bag_repair(args: argparse.Namespace) -> int:
+    from duckielib.bags import repair_bag
+
+    print(repair_bag(args.broken, args.output, compression=args.compression))
+    return 0
+
+
 def _mission(args: argparse.Namespace) -> int:
     raise NotBuiltError(
         "The mission runner (the square-then-circle task in the simulator) is not built yet; "
@@ -46,6 +115,53 @@ def _parser() -> argparse.ArgumentParser:
     )
     mission.add_argument("--out", default="runs/latest", help="folder for the bag, plot, summary")
     mission.set_defaults(handler=_mission)
+
+    bag = commands.add_parser("bag", help="inspect, plot, replay and repair ROS 1 bags")
+    bag_commands = bag.add_subparsers(dest="bag_command", metavar="BAG_COMMAND", required=True)
+    info = bag_commands.add_parser("info", help="topics, types, counts and duration of a bag")
+    info.add_argument("bag", help="the bag file")
+    info.set_defaults(handler=_bag_info)
+
+    time_base = {
+        "choices": ("auto", "header", "record"),
+        "default": "auto",
+        "help": "times to use: header stamps, record times, or auto (stamps unless all 0)",
+    }
+    plot = bag_commands.add_parser("plot", help="plot the poses (Pose2DStamped topics) of a bag")
+    plot.add_argument("bag", help="the bag file")
+    plot.add_argument("-o", "--output", required=True, help="the figure to write (.png/.svg/.pdf)")
+    plot.add_argument("--topic", action="append", help="a pose topic to plot (default: all)")
+    plot.add_argument("--time-base", **time_base)
+    plot.set_defaults(handler=_bag_plot)
+
+    odometry = bag_commands.add_parser(
+        "odometry", help="replay wheel odometry from a bag's encoder ticks"
+    )
+    odometry.add_argument("bag", help="the bag file")
+    odometry.add_argument(
+        "--start",
+        nargs=3,
+        type=float,
+        metavar=("X", "Y", "THETA"),
+        default=(0.32, 0.32, 1.5707963267948966),
+        help="the starting pose, in metres and radians (default: 0.32 0.32 pi/2)",
+    )
+    odometry.add_argument("--solution", help="a .py file with delta_phi and estimate_pose")
+    odometry.add_argument("--left", help="the left encoder topic (default: found by name)")
+    odometry.add_argument("--right", help="the right encoder topic (default: found by name)")
+    odometry.add_argument("--time-base", **time_base)
+    odometry.add_argument(
+        "--json", action="store_true", help='print {"x": .., "y": .., "theta": ..}'
+    )
+    odometry.set_defaults(handler=_bag_odometry)
+
+    repair = bag_commands.add_parser(
+        "repair", help="recover every complete message of a bag whose recording was killed"
+    )
+    repair.add_argument("broken", help="the damaged bag (for example run.bag.active)")
+    repair.add_argument("output", help="the repaired bag to write")
+    repair.add_argument("--compression", choices=("none", "bz2"), default="none")
+    repair.set_defaults(handler=_bag_repair)
 
     bench = commands.add_parser("bench", help="run a benchmark and print its figures")
     bench.add_argument("name", nargs="?", help="benchmark to run; omit to list them")

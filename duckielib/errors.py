@@ -15,6 +15,7 @@ __all__ = [
     "UnknownTypeError",
     "NotBuiltError",
     "SimulationError",
+    "BagError",
 ]
 
 
@@ -51,3 +52,7 @@ class NotBuiltError(DuckielibError):
 
 class SimulationError(DuckielibError):
     """The simulator was asked for something it cannot do, such as driving with a NaN duty cycle."""
+
+
+class BagError(DuckielibError):
+    """A bag cannot be read, written or repaired (the message says why and what to do)."""

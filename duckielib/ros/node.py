@@ -31,12 +31,32 @@ class TopicRecord:
         """The topic's message type, ``package/Type``."""
         return self.data_class._type
 
+    def connection_header(self) -> Dict[str, str]:
+        """What a ROS 1 connection header says of this topic (for ``AnyMsg`` subscribers)."""
+        callers = [publisher.node.name for publisher in self.publishers]
+        return {
+            "topic": self.name,
+            "type": self.data_class._type,
+            "md5sum": self.data_class._md5sum,
+            "message_definition": self.data_class._full_text,
+            "callerid": callers[0] if callers else "",
+            "latching": "1" if any(publisher.latch for publisher in self.publishers) else "0",
+        }
+
     def check_type(self, data_class: type, role: str, node: str) -> None:
         """Refuse a publisher or subscriber whose message type differs from the topic's.
+
+        A subscriber with ``AnyMsg`` accepts any type; a topic known only to such subscribers
+        takes the type of its first publisher or typed subscriber.
 
         Raises:
             ROSException: naming both types and who uses the topic.
         """
+        if data_class._md5sum == "*":
+            return
+        if self.data_class._md5sum == "*":
+            self.data_class = data_class
+            return
         if data_class._md5sum == self.data_class._md5sum and data_class._type == self.type:
             return
         users = sorted({item.node.name for item in self.publishers + self.subscribers})

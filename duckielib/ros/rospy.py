@@ -117,7 +117,35 @@ __all__ = [
     "TransportException",
 ]
 
-AnyMsg = Message
+
+
+class AnyMsg:
+    """Subscribe with this class to receive any topic's messages undecoded, as ``rosbag record``.
+
+    The callback gets an ``AnyMsg`` whose ``_buff`` holds the message's serialized bytes and
+    whose ``_connection_header`` gives the topic's ``type``, ``md5sum``, ``message_definition``
+    and the publishing node (``callerid``).
+    """
+
+    _type = "*"
+    _md5sum = "*"
+    _full_text = ""
+    _has_header = False
+
+    def __init__(self) -> None:
+        self._buff = b""
+        self._connection_header: dict = {}
+
+    @classmethod
+    def from_bytes(cls, data: bytes) -> AnyMsg:
+        """Wrap serialized bytes."""
+        message = cls()
+        message._buff = data
+        return message
+
+    def __repr__(self) -> str:
+        kind = self._connection_header.get("type", "?")
+        return f"<AnyMsg {kind}, {len(self._buff)} bytes>"
 
 _UNSET = object()
 
@@ -431,6 +459,8 @@ class Publisher:
     ) -> None:
         _check_dt_options("rospy.Publisher", dt_options)
         _check_data_class(data_class, "rospy.Publisher")
+        if data_class is AnyMsg:
+            raise ValueError("rospy.Publisher needs a concrete message class, not AnyMsg.")
         self._node: Node = current_node("rospy.Publisher")
         self.resolved_name = self.name = self._node.resolve(name)
         self.data_class = data_class
@@ -551,6 +581,8 @@ class Subscriber:
         self._scheduled = False
         while self._queue and self._record is not None:
             message = self.data_class.from_bytes(self._queue.popleft())
+            if self.data_class is AnyMsg:
+                message._connection_header = self._record.connection_header()
             if self.callback is None:
                 continue
             with node_context(self._node):

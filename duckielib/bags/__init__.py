@@ -1,0 +1,59 @@
+"""ROS 1 bags: record, read, repair and analyse them, from the simulator or a real robot.
+
+This package is the only place rosbags is imported. Bags written here open in ``rosbag
+info``/``rosbag play`` and Foxglove; bags recorded on a Duckiebot open here with the message
+definitions embedded in them.
+
+Modules (one idea each):
+    io: :class:`Bag` (read) and :class:`BagWriter` (write, uncompressed or BZ2).
+    recorder: :class:`BagRecorder`, ``rosbag record`` for the in-process graph.
+    repair: :func:`repair_bag`, every complete message of a killed recording.
+    records: the bag's records in file order, even from a damaged file.
+    analysis: topics as arrays, odometry replayed from encoder ticks, pose tracks.
+
+Example::
+
+    from duckielib.bags import Bag, read_topic, replay_odometry
+
+    bag = Bag("run.bag")
+    bag.topics                            # names, types, counts
+    ticks = read_topic(bag, "/duckiebot/left_wheel_encoder_node/tick")
+    track = replay_odometry(bag, delta_phi, estimate_pose)   # your own odometry functions
+    track.final_pose
+"""
+
+from __future__ import annotations
+
+from duckielib.bags.analysis import (
+    EncoderStream,
+    PoseTrack,
+    TopicArrays,
+    encoder_topics,
+    pose_tracks,
+    read_encoders,
+    read_topic,
+    replay_odometry,
+)
+from duckielib.bags.io import Bag, BagMessage, BagWriter, TopicInfo, course_typestore
+from duckielib.bags.recorder import BagRecorder, record
+from duckielib.bags.repair import RepairReport, repair_bag
+
+__all__ = [
+    "Bag",
+    "BagMessage",
+    "BagRecorder",
+    "BagWriter",
+    "EncoderStream",
+    "PoseTrack",
+    "RepairReport",
+    "TopicArrays",
+    "TopicInfo",
+    "course_typestore",
+    "encoder_topics",
+    "pose_tracks",
+    "read_encoders",
+    "read_topic",
+    "record",
+    "repair_bag",
+    "replay_odometry",
+]

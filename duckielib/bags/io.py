@@ -1,0 +1,416 @@
+"""Opening, reading and writing ROS 1 bags: the module that imports rosbags.
+
+- :class:`Bag` opens a bag for reading. rosbags checks it and reads its index (topics, types,
+  counts, times). Messages are decoded with duckielib's classes when the bag's type has the
+  same md5 sum, and otherwise with a rosbags type built from the definition embedded in the
+  bag, so a bag recorded on any Duckiebot reads without registering anything.
+- :class:`BagWriter` writes a bag with rosbags, uncompressed or BZ2 (rosbags' LZ4 chunks are
+  rejected by ROS 1's own tools, so they are refused here), and always finishes the bag
+  (chunks, index) when closed, also when the code writing it fails.
+- :func:`course_typestore`: a rosbags typestore with the course's types, registered from the
+  same ``.msg`` text as :mod:`duckielib.messages`.
+
+Times at this edge are integer nanoseconds (``time_ns``); a bag's record time is when the
+recorder received the message, which is not the message's header stamp.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, Iterable, Iterator, List, Optional, Tuple, Union
+
+from rosbags.rosbag1 import Reader, ReaderError, Writer, WriterError
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+from duckielib import messages as course_messages
+from duckielib.bags import records
+from duckielib.errors import BagError, UnknownTypeError
+
+__all__ = [
+    "Bag",
+    "BagMessage",
+    "BagWriter",
+    "TopicInfo",
+    "COMPRESSIONS",
+    "course_typestore",
+    "ros1_type",
+    "rosbags_type",
+]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Compressions a bag may be written with (ROS 1's tools read both).
+COMPRESSIONS = ("none", "bz2")
+
+
+def rosbags_type(ros1: str) -> str:
+    """``package/Type`` as rosbags names it: ``package/msg/Type``."""
+    package, _, name = ros1.partition("/")
+    return f"{package}/msg/{name}"
+
+
+def ros1_type(msgtype: str) -> str:
+    """The ROS 1 name ``package/Type`` of rosbags' ``package/msg/Type``."""
+    return msgtype.replace("/msg/", "/")
+
+
+def course_typestore() -> Any:
+    """A rosbags typestore holding every message type of the course, from its ``.msg`` text."""
+    store = get_typestore(Stores.EMPTY)
+    for name in course_messages.message_types():
+        cls = course_messages.get_message_class(name)
+        store.register(get_types_from_msg(cls._full_text, rosbags_type(name)))
+    return store
+
+
+@dataclass(frozen=True)
+class TopicInfo:
+    """One topic of a bag.
+
+    Attributes:
+        name: the topic's name.
+        type: its message type, ``package/Type``.
+        count: how many messages the bag holds on it.
+        md5sum: the type's md5 sum.
+        message_definition: the type's full definition, as recorded.
+    """
+
+    name: str
+    type: str
+    count: int
+    md5sum: str
+    message_definition: str
+
+
+@dataclass(frozen=True)
+class BagMessage:
+    """A message read from a bag.
+
+    Attributes:
+        topic: the topic it was recorded on.
+        time_ns: its record time, in integer nanoseconds.
+        message: the message: a duckielib message, or a rosbags one for other types.
+    """
+
+    topic: str
+    time_ns: int
+    message: Any
+
+    @property
+    def time(self) -> float:
+        """The record time, in seconds."""
+        return self.time_ns / 1e9
+
+
+def _unindexed_advice(path: Path) -> str:
+    return (
+        f"{path} was not closed properly (its recording was interrupted), so it has no index; "
+        f"recover its messages with: duckie bag repair {path} FIXED.bag"
+    )
+
+
+class Bag:
+    """A ROS 1 bag, opened for reading.
+
+    Args:
+        path: the bag file.
+
+    Attributes:
+        path: the bag file.
+        topics: every topic, by name (sorted), as :class:`TopicInfo`.
+        start_ns, end_ns: the first and last record times, in nanoseconds (0 for an empty bag).
+        message_count: how many messages the bag holds.
+        compression: ``none``, ``bz2`` or ``lz4``: how its chunks are compressed.
+
+    Raises:
+        BagError: if the file is missing, is not a ROS 1 bag, or was never closed (no index).
+    """
+
+    def __init__(self, path: PathLike) -> None:
+        self.path = Path(path)
+        if not self.path.exists():
+            raise BagError(f"There is no file {self.path}.")
+        if not self.path.is_file():
+            raise BagError(f"{self.path} is a directory, not a bag file.")
+        with self.path.open("rb") as file:
+            if file.read(len(records.MAGIC)) != records.MAGIC:
+                raise BagError(
+                    f"{self.path} is not a ROS 1 bag: it does not start with '#ROSBAG V2.0'."
+                )
+        try:
+            reader = Reader(self.path)
+            reader.open()
+        except ReaderError as error:
+            if "index" in str(error).lower():
+                raise BagError(_unindexed_advice(self.path)) from None
+            raise BagError(f"{self.path} cannot be read as a ROS 1 bag: {error}.") from None
+        try:
+            topics = {}
+            for name in sorted(reader.topics):
+                info = reader.topics[name]
+                connection = info.connections[0]
+                topics[name] = TopicInfo(
+                    name=name,
+                    type=ros1_type(info.msgtype or connection.msgtype),
+                    count=info.msgcount,
+                    md5sum=connection.digest,
+                    message_definition=connection.msgdef.data,
+                )
+            self.topics: Dict[str, TopicInfo] = topics
+            self.message_count: int = reader.message_count
+            self.start_ns: int = reader.start_time if self.message_count else 0
+            # rosbags gives the end as the last record time + 1 ns.
+            self.end_ns: int = reader.end_time - 1 if self.message_count else 0
+            self.compression = _compression(reader)
+            self.chunk_count = len(reader.chunk_infos)
+        finally:
+            reader.close()
+        self._decoders: Dict[Tuple[str, str], Any] = {}
+
+    def __repr__(self) -> str:
+        return f"<Bag {self.path.name}: {self.message_count} messages on {len(self.topics)} topics>"
+
+    def info(self) -> str:
+        """A summary like ``rosbag info``: path, duration, times, size, types and topics."""
+        size = self.path.stat().st_size
+        lines = [
+            f"path:        {self.path}",
+            "version:     2.0",
+            f"duration:    {self.duration:.1f}s",
+            f"start:       {self.start_ns / 1e9:.2f} s",
+            f"end:         {self.end_ns / 1e9:.2f} s",
+            f"size:        {_human_size(size)}",
+            f"messages:    {self.message_count}",
+            f"compression: {self.compression} [{self.chunk_count} chunks]",
+        ]
+        types = sorted({(info.type, info.md5sum) for info in self.topics.values()})
+        for index, (kind, md5sum) in enumerate(types):
+            lines.append(f"{'types:' if index == 0 else '':<13}{kind} [{md5sum}]")
+        if not types:
+            lines.append("types:       (none)")
+        width = max((len(name) for name in self.topics), default=0)
+        for index, info in enumerate(self.topics.values()):
+            label = "topics:" if index == 0 else ""
+            lines.append(f"{label:<13}{info.name:<{width}}  {info.count:>7} msgs    : {info.type}")
+        if not self.topics:
+            lines.append("topics:      (none: the bag is empty)")
+        return "\n".join(lines)
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first to the last message."""
+        return (self.end_ns - self.start_ns) / 1e9
+
+    def topic(self, name: str) -> TopicInfo:
+        """The topic ``name``.
+
+        Raises:
+            BagError: if the bag has no such topic (the message lists those it has).
+        """
+        info = self.topics.get(name)
+        if info is None:
+            known = ", ".join(self.topics) or "none, the bag is empty"
+            raise BagError(f"{self.path.name} has no topic {name}; its topics are: {known}.")
+        return info
+
+    def topics_of_type(self, message_type: str) -> List[str]:
+        """The names of the topics carrying ``message_type`` (``package/Type``)."""
+        return [name for name, info in self.topics.items() if info.type == message_type]
+
+    def raw_messages(self, topics: Iterable[str]) -> List[Tuple[str, int, bytes]]:
+        """``(topic, record time in ns, serialized bytes)`` of the topics' messages, by time.
+
+        Raises:
+            BagError: if a topic is not in the bag.
+        """
+        wanted = {self.topic(name).name for name in topics}
+        scan = records.scan(self.path, lambda connection: connection.topic in wanted)
+        topic_of = {cid: connection.topic for cid, connection in scan.connections.items()}
+        found = [(topic_of[cid], time_ns, data) for cid, time_ns, data in scan.messages]
+        found.sort(key=lambda item: item[1])
+        return found
+
+    def messages(self, topics: Optional[Iterable[str]] = None) -> Iterator[BagMessage]:
+        """The messages of ``topics`` (default: all), decoded, in record-time order.
+
+        Raises:
+            BagError: if a topic is not in the bag, or a message cannot be decoded.
+        """
+        names = list(self.topics) if topics is None else list(topics)
+        for topic, time_ns, data in self.raw_messages(names):
+            yield BagMessage(topic, time_ns, self._decode(self.topics[topic], data))
+
+    def read(self, topic: str) -> List[BagMessage]:
+        """Every message of one topic, decoded, in record-time order."""
+        return list(self.messages([topic]))
+
+    def _decode(self, info: TopicInfo, data: bytes) -> Any:
+        key = (info.type, info.md5sum)
+        decoder = self._decoders.get(key)
+        if decoder is None:
+            decoder = self._decoders[key] = _decoder(info)
+        try:
+            return decoder(data)
+        except Exception as error:
+            raise BagError(
+                f"A message on {info.name} ({info.type}) in {self.path.name} cannot be decoded: "
+                f"{error}."
+            ) from None
+
+
+def _human_size(size: int) -> str:
+    value = float(size)
+    for unit in ("B", "KB", "MB", "GB"):
+        if value < 1024 or unit == "GB":
+            return f"{value:.1f} {unit}" if unit != "B" else f"{size} B"
+        value /= 1024
+    return f"{size} B"  # pragma: no cover
+
+
+def _compression(reader: Reader) -> str:
+    """The compressions of the bag's chunks, read from their headers (``none`` if no chunk)."""
+    kinds = set()
+    with Path(reader.path).open("rb") as file:
+        for info in reader.chunk_infos:
+            file.seek(info.pos)
+            length = int.from_bytes(file.read(4), "little")
+            fields = records.parse_fields(file.read(length), 0, length)
+            kinds.add(fields.get(b"compression", b"none").decode("ascii", "replace"))
+    return "/".join(sorted(kinds)) if kinds else "none"
+
+
+def _decoder(info: TopicInfo) -> Any:
+    """A function decoding a topic's bytes: duckielib's class if it is the same type."""
+    try:
+        cls = course_messages.get_message_class(info.type)
+    except UnknownTypeError:
+        cls = None
+    if cls is not None and cls._md5sum == info.md5sum:
+        return cls.from_bytes
+    store = get_typestore(Stores.EMPTY)
+    msgtype = rosbags_type(info.type)
+    try:
+        store.register(get_types_from_msg(info.message_definition, msgtype))
+    except Exception as error:
+        raise BagError(
+            f"The definition of {info.type} recorded for {info.name} cannot be read: {error}."
+        ) from None
+    return lambda data: store.deserialize_ros1(data, msgtype)
+
+
+class BagWriter:
+    """Write a ROS 1 bag (format 2.0) with rosbags.
+
+    Use it as a context manager or call :meth:`close`: closing writes the last chunk and the
+    index, also when the code in the ``with`` block raised, so nothing written is lost.
+
+    Args:
+        path: the new bag file; it must not exist.
+        compression: ``"none"`` (default) or ``"bz2"``.
+
+    Raises:
+        BagError: if the file exists, cannot be created, or the compression is not allowed.
+    """
+
+    def __init__(self, path: PathLike, compression: str = "none") -> None:
+        self.path = Path(path)
+        if compression not in COMPRESSIONS:
+            raise BagError(
+                f"Bags are written uncompressed ('none') or with 'bz2', not {compression!r}: "
+                "ROS 1's tools cannot read the lz4 chunks rosbags writes."
+            )
+        if self.path.exists():
+            raise BagError(f"{self.path} exists already; choose another name or delete it first.")
+        self.compression = compression
+        self._writer = Writer(self.path)
+        if compression == "bz2":
+            self._writer.set_compression(Writer.CompressionFormat.BZ2)
+        try:
+            self._writer.open()
+        except (OSError, WriterError) as error:
+            raise BagError(f"Cannot create {self.path}: {error}.") from None
+        self._connections: Dict[Tuple[str, str], Any] = {}
+        self.count = 0
+        self.closed = False
+
+    def __enter__(self) -> BagWriter:
+        return self
+
+    def __exit__(self, *exc_info: Any) -> None:
+        self.close()
+
+    def write(self, topic: str, message: Any, time_ns: int) -> None:
+        """Write a duckielib message on ``topic`` with record time ``time_ns`` (nanoseconds).
+
+        Raises:
+            BagError: if the bag is closed or the time is negative.
+        """
+        self.write_raw(
+            topic,
+            message._type,
+            message._md5sum,
+            message._full_text,
+            time_ns,
+            message.to_bytes(),
+        )
+
+    def write_raw(
+        self,
+        topic: str,
+        message_type: str,
+        md5sum: str,
+        message_definition: str,
+        time_ns: int,
+        data: bytes,
+        callerid: Optional[str] = None,
+        latching: Optional[str] = None,
+    ) -> None:
+        """Write serialized message bytes, with the type's name, md5 sum and full definition.
+
+        Raises:
+            BagError: if the bag is closed or the time is negative.
+        """
+        if self.closed:
+            raise BagError(f"{self.path} is closed; open a new BagWriter to write more.")
+        if not isinstance(time_ns, int) or time_ns < 0:
+            raise BagError(
+                f"A record time must be a whole number of nanoseconds >= 0, not {time_ns!r}."
+            )
+        key = (topic, md5sum)
+        connection = self._connections.get(key)
+        if connection is None:
+            connection = self._writer.add_connection(
+                topic,
+                rosbags_type(message_type),
+                msgdef=message_definition,
+                md5sum=md5sum,
+                callerid=callerid,
+                latching=None if latching is None else int(latching),
+            )
+            self._connections[key] = connection
+        self._writer.write(connection, time_ns, data)
+        self.count += 1
+
+    def flush(self) -> None:
+        """Write the messages buffered so far to disk as a chunk.
+
+        A bag whose writer is killed later keeps everything flushed (see ``duckie bag repair``).
+        """
+        if self.closed:
+            return
+        writer = self._writer
+        chunk = writer.chunks[-1]
+        if chunk.data.tell() > 0:
+            writer.write_chunk(chunk)
+        if writer.bio is not None:
+            writer.bio.flush()
+            os.fsync(writer.bio.fileno())
+
+    def close(self) -> None:
+        """Finish the bag: write the last chunk and the index. Closing twice does nothing."""
+        if self.closed:
+            return
+        self.closed = True
+        self._writer.close()

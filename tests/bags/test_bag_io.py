@@ -1,0 +1,111 @@
+"""Writing and reading bags: round trips through rosbags, foreign types, bad files."""
+
+from __future__ import annotations
+
+import pytest
+from bagtools import LEFT, encoder, write_encoders
+from rosbags.rosbag1 import Reader
+
+from duckielib.bags import Bag, BagWriter, course_typestore
+from duckielib.bags.io import rosbags_type
+from duckielib.errors import BagError
+from duckielib.messages import LEDPattern, Pose2DStamped, String
+
+POINT_DEFINITION = "float64 x\nfloat64 y\nfloat64 z\n"
+POINT_MD5 = "4a842b65f413084dc2b10fb484ea7f17"
+
+
+@pytest.mark.parametrize("compression", ["none", "bz2"])
+def test_written_bags_read_back_exactly_with_rosbags(tmp_path, compression):
+    path = tmp_path / "run.bag"
+    pose = Pose2DStamped(x=1.25, y=-0.5, theta=3.0)
+    pattern = LEDPattern(color_list=["red"] * 5, frequency=2.0, frequency_mask=[1, 0, 0, 0, 1])
+    with BagWriter(path, compression) as writer:
+        writer.write("/duckiebot/pose", pose, 1_000_000_001)
+        writer.write("/duckiebot/led", pattern, 2_500_000_000)
+        writer.write(LEFT, encoder(-41, 3_000_000_000), 3_000_000_000)
+    store = course_typestore()
+    with Reader(path) as reader:
+        read = [(c.topic, t, c.digest, raw) for c, t, raw in reader.messages()]
+    assert [(topic, t) for topic, t, _, _ in read] == [
+        ("/duckiebot/pose", 1_000_000_001),
+        ("/duckiebot/led", 2_500_000_000),
+        (LEFT, 3_000_000_000),
+    ]
+    assert read[0][3] == pose.to_bytes()
+    assert read[0][2] == Pose2DStamped._md5sum
+    decoded = store.deserialize_ros1(read[0][3], rosbags_type("duckietown_msgs/Pose2DStamped"))
+    assert (decoded.x, decoded.y, decoded.theta) == (1.25, -0.5, 3.0)
+    led = store.deserialize_ros1(read[1][3], rosbags_type("duckietown_msgs/LEDPattern"))
+    assert list(led.color_list) == ["red"] * 5
+    assert list(led.frequency_mask) == [1, 0, 0, 0, 1]
+    bag = Bag(path)
+    assert bag.compression == compression
+    assert [item.message for item in bag.messages()] == [pose, pattern, encoder(-41, 3_000_000_000)]
+
+
+def test_foreign_types_decode_from_the_bags_own_definition(tmp_path):
+    path = tmp_path / "foreign.bag"
+    import struct
+
+    with BagWriter(path) as writer:
+        data = struct.pack("<ddd", 1.0, 2.0, 3.5)
+        writer.write_raw("/point", "geometry_msgs/Point", POINT_MD5, POINT_DEFINITION, 5, data)
+    bag = Bag(path)
+    assert bag.topics["/point"].type == "geometry_msgs/Point"
+    point = bag.read("/point")[0].message
+    assert (point.x, point.y, point.z) == (1.0, 2.0, 3.5)
+
+
+def test_info_summarises_like_rosbag_info(tmp_path):
+    path = write_encoders(tmp_path / "e.bag", [(0, 5), (10**9, 9)], [(5 * 10**8, 7)])
+    text = Bag(path).info()
+    assert "duration:    1.0s" in text
+    assert "messages:    3" in text
+    assert "duckietown_msgs/WheelEncoderStamped [141b74ec2cc3bde8c38b5e3bdb694d12]" in text
+    assert f"{LEFT}         2 msgs    : duckietown_msgs/WheelEncoderStamped" in text
+
+
+def test_writer_refuses_lz4_an_existing_file_and_bad_times(tmp_path):
+    with pytest.raises(BagError, match="lz4"):
+        BagWriter(tmp_path / "a.bag", "lz4")
+    (tmp_path / "b.bag").write_bytes(b"x")
+    with pytest.raises(BagError, match="exists already"):
+        BagWriter(tmp_path / "b.bag")
+    with BagWriter(tmp_path / "c.bag") as writer, pytest.raises(BagError, match="nanoseconds"):
+        writer.write("/s", String("x"), -1)
+
+
+def test_writer_finishes_the_bag_when_the_code_writing_it_fails(tmp_path):
+    path = tmp_path / "crash.bag"
+    with pytest.raises(ZeroDivisionError), BagWriter(path) as writer:  # noqa: PT012
+        writer.write("/s", String("kept"), 1)
+        raise ZeroDivisionError
+    assert [item.message.data for item in Bag(path).read("/s")] == ["kept"]
+
+
+def test_bad_files_get_one_clear_sentence(tmp_path):
+    with pytest.raises(BagError, match="There is no file"):
+        Bag(tmp_path / "missing.bag")
+    text = tmp_path / "notes.txt"
+    text.write_text("hello")
+    with pytest.raises(BagError, match="is not a ROS 1 bag"):
+        Bag(text)
+    empty = tmp_path / "empty.bag"
+    BagWriter(empty).close()
+    bag = Bag(empty)
+    assert bag.message_count == 0
+    assert bag.topics == {}
+    assert "(none: the bag is empty)" in bag.info()
+    with pytest.raises(BagError, match="has no topic /x; its topics are: none"):
+        bag.topic("/x")
+
+
+def test_an_unindexed_bag_suggests_repair(tmp_path):
+    path = tmp_path / "killed.bag"
+    writer = BagWriter(path)
+    writer.write("/s", String("a"), 1)
+    writer.flush()  # on disk, but never closed: no index
+    with pytest.raises(BagError, match="duckie bag repair"):
+        Bag(path)
+    writer.close()

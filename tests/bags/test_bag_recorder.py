@@ -1,0 +1,152 @@
+"""Recording the graph to bags: what is recorded, when it reaches the disk, how it is closed."""
+
+from __future__ import annotations
+
+import io
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+
+import pytest
+from bagtools import LEFT, RIGHT
+
+from duckielib.bags import Bag, BagRecorder, read_topic, repair_bag
+from duckielib.bags.records import scan
+from duckielib.errors import BagError
+from duckielib.messages import String
+from duckielib.ros import Graph, rospy
+from duckielib.ros.graph import node_context
+from duckielib.sim import VirtualDuckiebot
+
+TRUTH = "/duckiebot/simulator_node/ground_truth_pose"
+
+
+@pytest.fixture
+def bot(monkeypatch):
+    monkeypatch.delenv("VEHICLE_NAME", raising=False)
+    bot = VirtualDuckiebot(graph=Graph(stdout=io.StringIO(), stderr=io.StringIO()))
+    yield bot
+    bot.shutdown()
+
+
+def test_recording_chosen_topics(bot, tmp_path):
+    path = tmp_path / "run.bag"
+    with BagRecorder(path, [LEFT, RIGHT, TRUTH], graph=bot.graph) as recorder:
+        assert recorder.active_path.exists()
+        assert not path.exists()
+        bot.run(2.0)
+    assert path.exists()
+    assert not recorder.active_path.exists()
+    bag = Bag(path)
+    assert sorted(bag.topics) == sorted([LEFT, RIGHT, TRUTH])
+    assert bag.topics[LEFT].count in (60, 61)
+    truth = read_topic(bag, TRUTH)
+    assert truth.t[-1] == pytest.approx(2.0, abs=1 / 30)
+    assert (truth.record_t - truth.t).max() < 1e-9, "recorded at the moment it was published"
+
+
+def test_recording_everything_includes_topics_that_appear_later(bot, tmp_path):
+    path = tmp_path / "all.bag"
+    recorder = BagRecorder(path, graph=bot.graph)
+    rosnode_names = list(bot.graph.nodes)
+    assert any(name.startswith("/record_") for name in rosnode_names)
+    bot.run(0.5)
+    node = bot.graph.host_node("late")
+    with node_context(node):
+        chatter = rospy.Publisher("/chatter", String, queue_size=1)
+    bot.run(0.2)
+    chatter.publish(String("hello"))
+    bot.run(0.2)
+    recorder.close()
+    bag = Bag(path)
+    assert [item.message.data for item in bag.read("/chatter")] == ["hello"]
+    assert "/duckiebot/camera_node/image/compressed" in bag.topics
+
+
+def test_a_bag_is_closed_by_an_exception_and_by_shutdown(bot, tmp_path):
+    first = tmp_path / "error.bag"
+    with pytest.raises(RuntimeError), BagRecorder(first, [LEFT], graph=bot.graph):  # noqa: PT012
+        bot.run(1.0)
+        raise RuntimeError("the mission failed")
+    assert Bag(first).topics[LEFT].count in (30, 31)
+    second = tmp_path / "shutdown.bag"
+    recorder = BagRecorder(second, [TRUTH], graph=bot.graph)
+    bot.run(1.0)
+    bot.shutdown()
+    assert recorder.closed
+    assert Bag(second).topics[TRUTH].count in (30, 31)
+
+
+def test_refuses_to_overwrite(tmp_path):
+    (tmp_path / "x.bag").write_bytes(b"")
+    with pytest.raises(BagError, match="exists already"):
+        BagRecorder(tmp_path / "x.bag", graph=Graph(echo_logs=False))
+
+
+def test_messages_reach_the_disk_by_the_flush_interval(bot, tmp_path):
+    eager = BagRecorder(tmp_path / "eager.bag", [LEFT], graph=bot.graph, flush_interval=0.0)
+    lazy = BagRecorder(tmp_path / "lazy.bag", [LEFT], graph=bot.graph, flush_interval=3600.0)
+    bot.run(1.0)
+    assert len(scan(eager.active_path).messages) == eager.counts[LEFT] > 0
+    assert len(scan(lazy.active_path).messages) == 0, "still in memory"
+    lazy.flush()
+    assert len(scan(lazy.active_path).messages) == lazy.counts[LEFT]
+
+
+RECORDING = textwrap.dedent(
+    """
+    import sys
+    from duckielib.bags import BagRecorder
+    from duckielib.ros import Graph
+    from duckielib.sim import VirtualDuckiebot
+
+    bot = VirtualDuckiebot(graph=Graph(echo_logs=False))
+    recorder = BagRecorder(sys.argv[1], graph=bot.graph,
+                           topics=["{left}", "{right}", "{truth}"])
+    if sys.argv[2] == "exit":
+        bot.run(2.0)
+        sys.exit(0)  # never closed by the code: closed when Python exits
+    while True:
+        bot.run(1.0)
+        recorder.flush()
+        print(sum(recorder.counts.values()), flush=True)
+    """
+).format(left=LEFT, right=RIGHT, truth=TRUTH)
+
+
+def run_recording(path, mode):
+    return subprocess.Popen(
+        [sys.executable, "-c", RECORDING, str(path), mode],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+
+
+def test_a_recording_left_open_is_closed_when_python_exits(tmp_path):
+    path = tmp_path / "exit.bag"
+    process = run_recording(path, "exit")
+    assert process.wait(timeout=120) == 0
+    assert Bag(path).topics[LEFT].count in (60, 61)
+
+
+def test_a_killed_recording_is_repaired_up_to_its_last_flush(tmp_path):
+    path = tmp_path / "killed.bag"
+    process = run_recording(path, "loop")
+    flushed = [int(process.stdout.readline()) for _ in range(3)]
+    os.kill(process.pid, signal.SIGKILL)
+    process.wait(timeout=60)
+    process.stdout.close()
+    active = tmp_path / "killed.bag.active"
+    assert active.exists()
+    assert not path.exists()
+    with pytest.raises(BagError, match="duckie bag repair"):
+        Bag(active)
+    report = repair_bag(active, tmp_path / "fixed.bag")
+    assert report.messages >= flushed[-1] > flushed[0] > 0
+    assert not report.was_indexed
+    bag = Bag(tmp_path / "fixed.bag")
+    assert bag.message_count == report.messages
+    left = read_topic(bag, LEFT)
+    assert (left["data"] == left["data"][0]).all(), "a robot standing still"
