@@ -128,3 +128,34 @@ def test_ruff_format_is_clean():
         check=False,
     )
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+#: Edges stay at the edges (DESIGN.md, principle 5): each heavy package, the only places
+#: in duckielib that may import it.
+EDGES = {
+    "pymunk": ("duckielib/sim/",),
+    "rosbags": ("duckielib/bags/io.py",),
+    "matplotlib": ("duckielib/plots.py", "duckielib/sim/draw.py", "duckielib/sim/examples/"),
+}
+
+
+def _imported_packages(path: Path) -> set[str]:
+    import ast
+
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            found.update(alias.name.split(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module.split(".")[0])
+    return found
+
+
+def test_heavy_packages_are_imported_only_at_their_edge():
+    misplaced = []
+    for path in sorted((ROOT / "duckielib").rglob("*.py")):
+        relative = path.relative_to(ROOT).as_posix()
+        for package in _imported_packages(path) & set(EDGES):
+            if not relative.startswith(EDGES[package]):
+                misplaced.append(f"{relative} imports {package}")
+    assert misplaced == []

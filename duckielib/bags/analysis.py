@@ -393,10 +393,14 @@ def replay_odometry(
     for stream in (left, right):
         if not len(stream.t):
             raise BagError(f"{stream.topic} has no message, so no odometry can be computed.")
-    events = sorted(
-        [(t, 0, int(v), int(r)) for t, v, r in zip(left.t, left.ticks, left.resolution)]
-        + [(t, 1, int(v), int(r)) for t, v, r in zip(right.t, right.ticks, right.resolution)],
-        key=lambda event: (event[0], event[1]),
+    times_all = np.concatenate([left.t, right.t])
+    wheels = np.concatenate([np.zeros(len(left.t), np.int64), np.ones(len(right.t), np.int64)])
+    order = np.lexsort((wheels, times_all))  # by time, the left wheel first at equal times
+    events = zip(
+        times_all[order].tolist(),
+        wheels[order].tolist(),
+        np.concatenate([left.ticks, right.ticks])[order].tolist(),
+        np.concatenate([left.resolution, right.resolution])[order].tolist(),
     )
     x, y, theta = (float(value) for value in start)
     previous: List[Optional[int]] = [None, None]

@@ -118,7 +118,6 @@ __all__ = [
 ]
 
 
-
 class AnyMsg:
     """Subscribe with this class to receive any topic's messages undecoded, as ``rosbag record``.
 
@@ -146,6 +145,7 @@ class AnyMsg:
     def __repr__(self) -> str:
         kind = self._connection_header.get("type", "?")
         return f"<AnyMsg {kind}, {len(self._buff)} bytes>"
+
 
 _UNSET = object()
 

@@ -185,6 +185,36 @@ def test_latched_topic_reaches_late_subscribers(graph):
     assert got == {"latched": ["the map"], "plain": []}
 
 
+def test_anymsg_receives_any_topics_bytes_and_connection_header(graph):
+    raw = []
+
+    def recorder():
+        rospy.init_node("recorder")
+        rospy.Subscriber("chatter", rospy.AnyMsg, raw.append, queue_size=None)
+        rospy.spin()
+
+    def talker():
+        rospy.init_node("talker")
+        rospy.sleep(0.1)
+        rospy.Publisher("chatter", String, queue_size=1).publish("hi")
+        rospy.spin()
+
+    graph.launch(recorder)
+    graph.launch(talker)
+    graph.run(1.0)
+    assert graph.topics["/chatter"].type == "std_msgs/String", "the publisher gave the type"
+    assert [message._buff for message in raw] == [String("hi").to_bytes()]
+    header = raw[0]._connection_header
+    assert header["type"] == "std_msgs/String"
+    assert header["md5sum"] == String._md5sum
+    assert header["callerid"] == "/talker"
+    assert header["message_definition"] == String._full_text
+    graph.shutdown()
+    rospy.init_node("publisher_of_nothing")
+    with pytest.raises(ValueError, match="concrete message class"):
+        rospy.Publisher("chatter", rospy.AnyMsg, queue_size=1)
+
+
 def test_messages_arrive_as_copies_with_header_seq(graph):
     got = []
 
