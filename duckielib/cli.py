@@ -49,9 +49,14 @@ def _bag_plot(args: argparse.Namespace) -> int:
             f"{bag.path.name} has no topic of type duckietown_msgs/Pose2DStamped to plot; "
             "for a bag of encoder ticks, compute the poses with 'duckie bag odometry'."
         )
+    import dataclasses
+
     from duckielib import plots
 
-    figure = plots.pose_figure(tracks, title=bag.path.name)
+    # Times from the bag's first pose: a real robot's clock gives seconds since 1970.
+    start = min((float(track.t[0]) for track in tracks if len(track)), default=0.0)
+    tracks = [dataclasses.replace(track, t=track.t - start) for track in tracks]
+    figure = plots.pose_figure(tracks, title=f"{bag.path.name} (t = 0 at {start:.3f} s)")
     print(f"Wrote {plots.save_figure(figure, args.output)}.")
     return 0
 
