@@ -7,13 +7,18 @@ records, the bag is ``NAME.bag.active``; it becomes ``NAME.bag`` when the record
 Nothing recorded is lost to an ordinary failure: the bag is closed (chunks and index written)
 when the ``with`` block ends, also by an exception, when the graph shuts down, and when Python
 exits. Against a killed process, the messages are written to disk at least once per second of
-wall time, and ``duckie bag repair`` recovers everything written before the kill.
+wall time (by a background thread, also while the graph is idle), and ``duckie bag repair``
+recovers everything written before the kill.
+
+Recording every topic also subscribes to the camera, which then renders its frames (about
+15 ms each); list the topics to record when the images are not needed.
 """
 
 from __future__ import annotations
 
 import atexit
 import itertools
+import threading
 import time
 from pathlib import Path
 from typing import Any, Dict, Iterable, Optional
@@ -71,6 +76,10 @@ class BagRecorder:
         self.closed = False
         self._writer = BagWriter(self.active_path, compression)
         self._last_flush = time.monotonic()
+        self._unflushed = False
+        # The graph's thread writes, the flusher thread flushes: the lock keeps them apart.
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
         self._node = self.graph.host_node(f"record_{next(_numbers)}")
         self._node.shutdown_hooks.append(self.close)
         self._subscribed: Dict[str, Any] = {}
@@ -80,6 +89,10 @@ class BagRecorder:
         if self._all:
             self._discover()
         atexit.register(self.close)
+        if flush_interval > 0:
+            threading.Thread(
+                target=self._flush_periodically, name=f"flush:{self.path.name}", daemon=True
+            ).start()
 
     def __enter__(self) -> BagRecorder:
         return self
@@ -112,24 +125,32 @@ class BagRecorder:
         if self.closed:
             return
         header = message._connection_header
-        self._writer.write_raw(
-            topic,
-            header["type"],
-            header["md5sum"],
-            header["message_definition"],
-            self.graph.now_ns,
-            message._buff,
-            callerid=header.get("callerid") or None,
-            latching=header.get("latching"),
-        )
+        with self._lock:
+            self._writer.write_raw(
+                topic,
+                header["type"],
+                header["md5sum"],
+                header["message_definition"],
+                self.graph.now_ns,
+                message._buff,
+                callerid=header.get("callerid") or None,
+                latching=header.get("latching"),
+            )
+            self._unflushed = True
         self.counts[topic] += 1
         if time.monotonic() - self._last_flush >= self.flush_interval:
             self.flush()
 
+    def _flush_periodically(self) -> None:
+        while not self._stop.wait(self.flush_interval):
+            self.flush()
+
     def flush(self) -> None:
         """Write every message recorded so far to disk."""
-        if not self.closed:
-            self._writer.flush()
+        with self._lock:
+            if not self.closed and self._unflushed:
+                self._writer.flush()
+                self._unflushed = False
             self._last_flush = time.monotonic()
 
     def close(self) -> Path:
@@ -140,10 +161,12 @@ class BagRecorder:
         """
         if self.closed:
             return self.path
-        self.closed = True
+        self._stop.set()
         atexit.unregister(self.close)
         try:
-            self._writer.close()
+            with self._lock:
+                self.closed = True
+                self._writer.close()
         finally:
             if self.active_path.exists():
                 self.active_path.replace(self.path)

@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import textwrap
+import time
 
 import pytest
 from bagtools import LEFT, RIGHT
@@ -93,6 +94,17 @@ def test_messages_reach_the_disk_by_the_flush_interval(bot, tmp_path):
     assert len(scan(lazy.active_path).messages) == 0, "still in memory"
     lazy.flush()
     assert len(scan(lazy.active_path).messages) == lazy.counts[LEFT]
+
+
+def test_an_idle_recording_still_reaches_the_disk(bot, tmp_path):
+    recorder = BagRecorder(tmp_path / "idle.bag", [LEFT], graph=bot.graph, flush_interval=0.2)
+    bot.run(1.0)  # a few milliseconds of wall time: no flush yet
+    recorded = recorder.counts[LEFT]
+    deadline = time.monotonic() + 5.0
+    while len(scan(recorder.active_path).messages) < recorded and time.monotonic() < deadline:
+        time.sleep(0.05)  # the graph is idle; the recorder's own thread flushes
+    assert len(scan(recorder.active_path).messages) == recorded > 0
+    recorder.close()
 
 
 RECORDING = textwrap.dedent(
