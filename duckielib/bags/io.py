@@ -122,7 +122,6 @@ class Bag:
         topics: every topic, by name (sorted), as :class:`TopicInfo`.
         start_ns, end_ns: the first and last record times, in nanoseconds (0 for an empty bag).
         message_count: how many messages the bag holds.
-        compression: ``none``, ``bz2`` or ``lz4``: how its chunks are compressed.
 
     Raises:
         BagError: if the file is missing, is not a ROS 1 bag, or was never closed (no index).
@@ -163,14 +162,26 @@ class Bag:
             self.start_ns: int = reader.start_time if self.message_count else 0
             # rosbags gives the end as the last record time + 1 ns.
             self.end_ns: int = reader.end_time - 1 if self.message_count else 0
-            self.compression = _compression(reader)
-            self.chunk_count = len(reader.chunk_infos)
+            self._chunk_positions = [info.pos for info in reader.chunk_infos]
+            self.chunk_count = len(self._chunk_positions)
         finally:
             reader.close()
         self._decoders: Dict[Tuple[str, str], Any] = {}
 
     def __repr__(self) -> str:
         return f"<Bag {self.path.name}: {self.message_count} messages on {len(self.topics)} topics>"
+
+    @property
+    def compression(self) -> str:
+        """``none``, ``bz2`` or ``lz4``: how the chunks are compressed, read from their headers."""
+        kinds = set()
+        with self.path.open("rb") as file:
+            for position in self._chunk_positions:
+                file.seek(position)
+                length = int.from_bytes(file.read(4), "little")
+                fields = records.parse_fields(file.read(length), 0, length)
+                kinds.add(fields.get(b"compression", b"none").decode("ascii", "replace"))
+        return "/".join(sorted(kinds)) if kinds else "none"
 
     def info(self) -> str:
         """A summary like ``rosbag info``: path, duration, times, size, types and topics."""
@@ -267,18 +278,6 @@ def _human_size(size: int) -> str:
             return f"{value:.1f} {unit}" if unit != "B" else f"{size} B"
         value /= 1024
     return f"{size} B"  # pragma: no cover
-
-
-def _compression(reader: Reader) -> str:
-    """The compressions of the bag's chunks, read from their headers (``none`` if no chunk)."""
-    kinds = set()
-    with Path(reader.path).open("rb") as file:
-        for info in reader.chunk_infos:
-            file.seek(info.pos)
-            length = int.from_bytes(file.read(4), "little")
-            fields = records.parse_fields(file.read(length), 0, length)
-            kinds.add(fields.get(b"compression", b"none").decode("ascii", "replace"))
-    return "/".join(sorted(kinds)) if kinds else "none"
 
 
 def _decoder(info: TopicInfo) -> Any:

@@ -27,7 +27,7 @@ simulator_node              pub ``~ground_truth_pose`` (simulator only: no robot
 
 from __future__ import annotations
 
-from typing import Any, List, Sequence
+from typing import Any, Sequence
 
 from duckielib import leds as led_tables
 from duckielib.config import RobotConfig
@@ -55,20 +55,7 @@ __all__ = [
     "LEDEmitterNode",
     "WheelEncoderNode",
     "WheelsDriverNode",
-    "NODE_NAMES",
 ]
-
-#: The driver nodes' names, in the order they start.
-NODE_NAMES = (
-    "wheels_driver_node",
-    "left_wheel_encoder_node",
-    "right_wheel_encoder_node",
-    "kinematics_node",
-    "car_cmd_switch_node",
-    "led_emitter_node",
-    "camera_node",
-    "simulator_node",
-)
 
 _NS_PER_S = 1_000_000_000
 
@@ -393,13 +380,3 @@ class GroundTruthNode:
         msg.header.stamp = stamp_at(self.rospy, t_ns)
         msg.header.frame_id = "world"
         self.pub_pose.publish(msg)
-
-
-def due_readings(pending: List[EncoderReading], t_ns: int) -> List[EncoderReading]:
-    """Remove and return the readings of ``pending`` (time-ordered) due at or before ``t_ns``."""
-    count = 0
-    while count < len(pending) and round(pending[count].time * _NS_PER_S) <= t_ns:
-        count += 1
-    due = pending[:count]
-    del pending[:count]
-    return due

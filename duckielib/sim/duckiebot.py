@@ -141,7 +141,7 @@ class VirtualDuckiebot:
         if self.graph.is_shutdown:
             return
         self._pending.extend(self.sim.pop_encoder_readings())
-        for reading in drivers.due_readings(self._pending, self.graph.now_ns - self._offset_ns):
+        for reading in _due_readings(self._pending, self.graph.now_ns - self._offset_ns):
             if self._running(f"{reading.wheel}_wheel_encoder_node"):
                 self._encoders[reading.wheel].publish(reading)
         self._schedule_encoders()
@@ -218,3 +218,13 @@ class VirtualDuckiebot:
             f"<VirtualDuckiebot {self.name!r} at t={self.time:.3f} s: "
             f"x={x:.3f} m, y={y:.3f} m, theta={theta:.3f} rad>"
         )
+
+
+def _due_readings(pending: List[EncoderReading], t_ns: int) -> List[EncoderReading]:
+    """Remove and return the readings of ``pending`` (time-ordered) due at or before ``t_ns``."""
+    count = 0
+    while count < len(pending) and round(pending[count].time * NS_PER_S) <= t_ns:
+        count += 1
+    due = pending[:count]
+    del pending[:count]
+    return due
