@@ -65,19 +65,13 @@ def _bag_odometry(args: argparse.Namespace) -> int:
     import json
 
     from duckielib.bags import Bag, replay_odometry
-    from duckielib.solution import SolutionError, load_solution
+    from duckielib.solution import load_solution
 
-    if args.solution is None:
-        raise SolutionError(
-            "Give your odometry with --solution FILE.py (a module with delta_phi and "
-            "estimate_pose): the course's reference solution is not exported yet."
-        )
     solution = load_solution(args.solution)
     bag = Bag(args.bag)
     track = replay_odometry(
         bag,
-        solution.delta_phi,
-        solution.estimate_pose,
+        solution,
         start=args.start,
         left_topic=args.left,
         right_topic=args.right,
@@ -101,6 +95,44 @@ def _bag_repair(args: argparse.Namespace) -> int:
     return 0
 
 
+def _release(args: argparse.Namespace) -> int:
+    from autograder.course import ROOT, compare_release, release_course
+
+    if args.check:
+        differences = compare_release()
+        if differences:
+            for line in differences:
+                print(line)
+            print("course/ is stale: run 'duckie release' and commit course/.", file=sys.stderr)
+            return 1
+        print("course/ is identical to a fresh release of solutions/.")
+        return 0
+    released = release_course()
+    for path in released:
+        print(f"released {path.relative_to(ROOT)}")
+    print(f"{len(released)} notebooks in course/; commit solutions/ and course/ together.")
+    return 0
+
+
+def _export(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from duckielib.solution import export_solution
+
+    export = export_solution(args.folder)
+    output = Path(args.output)
+    if output.suffix != ".py":
+        raise DuckielibError(f"{output} must end in .py: a solution is a Python module.")
+    if not output.parent.is_dir():
+        raise DuckielibError(f"There is no folder {output.parent} to write {output.name} into.")
+    partial = output.with_name(output.name + ".partial")
+    partial.write_text(export.source, encoding="utf-8")
+    partial.replace(output)
+    print(export.report())
+    print(f"Wrote {output}.")
+    return 0
+
+
 def _mission(args: argparse.Namespace) -> int:
     raise NotBuiltError(
         "The mission runner (the square-then-circle task in the simulator) is not built yet; "
@@ -120,6 +152,21 @@ def _parser() -> argparse.ArgumentParser:
     )
     mission.add_argument("--out", default="runs/latest", help="folder for the bag, plot, summary")
     mission.set_defaults(handler=_mission)
+
+    export = commands.add_parser(
+        "export", help="collect the graded functions of your notebooks into one solution module"
+    )
+    export.add_argument("folder", help="the folder of notebooks (your course/, or solutions/)")
+    export.add_argument("-o", "--output", required=True, help="the .py file to write")
+    export.set_defaults(handler=_export)
+
+    release = commands.add_parser(
+        "release", help="regenerate course/ from solutions/ with nbgrader (instructors)"
+    )
+    release.add_argument(
+        "--check", action="store_true", help="only say whether course/ is up to date"
+    )
+    release.set_defaults(handler=_release)
 
     bag = commands.add_parser("bag", help="inspect, plot, replay and repair ROS 1 bags")
     bag_commands = bag.add_subparsers(dest="bag_command", metavar="BAG_COMMAND", required=True)
@@ -151,7 +198,10 @@ def _parser() -> argparse.ArgumentParser:
         default=(0.32, 0.32, 1.5707963267948966),
         help="the starting pose, in metres and radians (default: 0.32 0.32 pi/2)",
     )
-    odometry.add_argument("--solution", help="a .py file with delta_phi and estimate_pose")
+    odometry.add_argument(
+        "--solution",
+        help="your notebooks' folder or a file made by duckie export (default: the reference)",
+    )
     odometry.add_argument("--left", help="the left encoder topic (default: found by name)")
     odometry.add_argument("--right", help="the right encoder topic (default: found by name)")
     odometry.add_argument("--time-base", **time_base)

@@ -6,16 +6,10 @@ On a real robot they differ by clock skew, and some bags have all stamps 0. Each
 takes ``time_base``: ``"header"``, ``"record"``, or ``"auto"`` (header stamps unless they are
 all 0), and says in ``notes`` when the two disagree.
 
-Odometry. :func:`replay_odometry` feeds a bag's encoder ticks to two functions with the
-signatures of the course (and of Duckietown's MOOC)::
-
-    delta_phi(ticks, prev_ticks, resolution) -> (delta_phi, ticks)
-    estimate_pose(R, baseline, x_prev, y_prev, theta_prev, delta_phi_left, delta_phi_right)
-        -> (x, y, theta)
-
-so a student's own functions can be replayed on any bag. The replay never updates from one
-wheel alone: it waits until both wheels have reported since the last update, and a wheel that
-reported several times meanwhile contributes its whole change since the last update.
+Odometry. :func:`replay_odometry` feeds a bag's encoder ticks, in time order, to a solution's
+odometry (its ``WheelPairing``, ``delta_phi`` and ``estimate_pose``, see
+:mod:`duckielib.solution`), so a student's own code can be replayed on any bag, simulated or
+recorded on a robot.
 """
 
 from __future__ import annotations
@@ -23,13 +17,14 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass, field
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
 from duckielib.bags.io import Bag, PathLike
 from duckielib.config import DB21
-from duckielib.errors import BagError, DuckielibError
+from duckielib.errors import BagError
+from duckielib.odometry import Odometry
 
 __all__ = [
     "EncoderStream",
@@ -335,30 +330,9 @@ def pose_tracks(bag: Union[Bag, PathLike], time_base: str = "auto") -> List[Pose
     return tracks
 
 
-DeltaPhi = Callable[[int, int, int], Tuple[float, int]]
-EstimatePose = Callable[
-    [float, float, float, float, float, float, float], Tuple[float, float, float]
-]
-
-
-def _call(function: Callable[..., Any], name: str, *args: Any) -> Any:
-    try:
-        return function(*args)
-    except NotImplementedError:
-        raise DuckielibError(
-            f"{name} is not implemented yet: finish it in its notebook, then run this again."
-        ) from None
-    except Exception as error:
-        arguments = ", ".join(repr(arg) for arg in args)
-        raise DuckielibError(
-            f"{name}({arguments}) raised {type(error).__name__}: {error}"
-        ) from error
-
-
 def replay_odometry(
     bag: Union[Bag, PathLike],
-    delta_phi: DeltaPhi,
-    estimate_pose: EstimatePose,
+    solution: Any,
     start: Sequence[float] = (0.32, 0.32, math.pi / 2),
     radius: float = DB21.radius,
     baseline: float = DB21.baseline,
@@ -367,13 +341,15 @@ def replay_odometry(
     time_base: str = "auto",
     label: str = "odometry",
 ) -> PoseTrack:
-    """Dead reckoning from a bag's encoder ticks, with the given odometry functions.
+    """Dead reckoning from a bag's encoder ticks, with a solution's odometry.
+
+    The readings of both wheels are fed, in time order, to the solution's ``WheelPairing``;
+    each pair it returns moves the pose through the solution's ``estimate_pose``.
 
     Args:
         bag: a :class:`~duckielib.bags.Bag` or a bag's path.
-        delta_phi: ``delta_phi(ticks, prev_ticks, resolution) -> (delta_phi, ticks)``.
-        estimate_pose: ``estimate_pose(R, baseline, x_prev, y_prev, theta_prev,
-            delta_phi_left, delta_phi_right) -> (x, y, theta)``.
+        solution: what holds ``delta_phi``, ``estimate_pose`` and ``WheelPairing``: a module
+            (see :func:`~duckielib.solution.load_solution`) or, in a notebook, ``globals()``.
         start: the pose (x, y, theta) at the first pair of readings; metres, radians.
         radius: wheel radius R, in metres.
         baseline: distance between the wheels, in metres.
@@ -383,64 +359,32 @@ def replay_odometry(
         label: the track's label.
 
     Returns:
-        The poses: the start, then one per update.
+        The poses: one per pair of readings, the first at ``start``.
 
     Raises:
         BagError: if the bag has no encoder topics, or one wheel has no message.
-        DuckielibError: if an odometry function is not implemented or fails.
+        SolutionError: if the solution lacks a part, has not finished it, or a part fails.
     """
     left, right = read_encoders(bag, left_topic, right_topic, time_base)
     for stream in (left, right):
         if not len(stream.t):
             raise BagError(f"{stream.topic} has no message, so no odometry can be computed.")
+    odometry = Odometry(solution, int(left.resolution[0]), radius, baseline, start)
     times_all = np.concatenate([left.t, right.t])
     wheels = np.concatenate([np.zeros(len(left.t), np.int64), np.ones(len(right.t), np.int64)])
     order = np.lexsort((wheels, times_all))  # by time, the left wheel first at equal times
-    events = zip(
+    names = ("left", "right")
+    times: List[float] = []
+    poses: List[Tuple[float, float, float]] = []
+    for t, wheel, ticks in zip(
         times_all[order].tolist(),
         wheels[order].tolist(),
         np.concatenate([left.ticks, right.ticks])[order].tolist(),
-        np.concatenate([left.resolution, right.resolution])[order].tolist(),
-    )
-    x, y, theta = (float(value) for value in start)
-    previous: List[Optional[int]] = [None, None]
-    latest: List[Optional[Tuple[int, int]]] = [None, None]
-    times: List[float] = []
-    poses: List[Tuple[float, float, float]] = []
-    for t, wheel, ticks, resolution in events:
-        if previous[wheel] is None:
-            previous[wheel] = ticks
-            if previous[1 - wheel] is not None:
-                times.append(t)
-                poses.append((x, y, theta))
-            continue
-        latest[wheel] = (ticks, resolution)
-        if latest[0] is None or latest[1] is None or previous[1 - wheel] is None:
-            continue
-        phis = []
-        for side, name in ((0, "left"), (1, "right")):
-            side_ticks, side_resolution = latest[side]  # type: ignore[misc]
-            result = _call(
-                delta_phi, f"delta_phi ({name} wheel)", side_ticks, previous[side], side_resolution
-            )
-            try:
-                phi, kept = result
-            except (TypeError, ValueError):
-                raise DuckielibError(
-                    f"delta_phi must return two values (delta_phi, ticks), not {result!r}."
-                ) from None
-            phis.append(phi)
-            previous[side] = kept
-        pose = _call(estimate_pose, "estimate_pose", radius, baseline, x, y, theta, *phis)
-        try:
-            x, y, theta = (float(value) for value in pose)
-        except (TypeError, ValueError):
-            raise DuckielibError(
-                f"estimate_pose must return three numbers (x, y, theta), not {pose!r}."
-            ) from None
-        latest = [None, None]
-        times.append(t)
-        poses.append((x, y, theta))
+    ):
+        pose = odometry.add(names[wheel], ticks)
+        if pose is not None:
+            times.append(t)
+            poses.append(pose)
     array = np.array(poses, dtype=np.float64).reshape(-1, 3)
     return PoseTrack(
         np.array(times), array[:, 0], array[:, 1], array[:, 2], label, left.notes + right.notes

@@ -46,3 +46,29 @@ def estimate_pose(
         y_prev + distance * math.sin(theta_prev),
         (theta_prev + turn) % (2 * math.pi),
     )
+
+
+class WheelPairing:
+    """The course's pairing rule: a pair once both wheels reported, changes accumulated."""
+
+    def __init__(self, resolution=135):
+        self.resolution = resolution
+        self.prev = {}
+        self.change = {"left": 0.0, "right": 0.0}
+        self.reported = set()
+
+    def add(self, wheel, ticks):
+        if wheel not in self.change:
+            raise ValueError(f"wheel must be 'left' or 'right', not {wheel!r}")
+        if wheel in self.prev:
+            change, self.prev[wheel] = delta_phi(ticks, self.prev[wheel], self.resolution)
+            self.change[wheel] += change
+        else:
+            self.prev[wheel] = ticks
+        self.reported.add(wheel)
+        if len(self.reported) < 2:
+            return None
+        pair = (self.change["left"], self.change["right"])
+        self.change = {"left": 0.0, "right": 0.0}
+        self.reported = set()
+        return pair

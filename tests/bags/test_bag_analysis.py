@@ -4,13 +4,15 @@ from __future__ import annotations
 
 import math
 
+import bagtools
 import numpy as np
 import pytest
-from bagtools import LEFT, delta_phi, estimate_pose, write_encoders
+from bagtools import LEFT, write_encoders
 
 from duckielib.bags import BagWriter, read_encoders, read_topic, replay_odometry
-from duckielib.errors import BagError, DuckielibError
+from duckielib.errors import BagError
 from duckielib.messages import Pose2DStamped, String
+from duckielib.solution import SolutionError
 
 S = 1_000_000_000
 R, BASELINE = 0.0318, 0.1
@@ -63,7 +65,7 @@ def test_straight_drive_replays_to_the_travelled_distance(tmp_path):
     left = [(k * S // 30, 40_000 + round(k * step)) for k in range(101)]
     right = [(k * S // 30 + 7_000_000, -25_000 + round(k * step)) for k in range(101)]
     path = write_encoders(tmp_path / "straight.bag", left, right)
-    track = replay_odometry(path, delta_phi, estimate_pose, start=(0.32, 0.32, math.pi / 2))
+    track = replay_odometry(path, bagtools, start=(0.32, 0.32, math.pi / 2))
     x, y, theta = track.final_pose
     travelled = ticks_for(1.0) * REVOLUTION / 135
     assert x == pytest.approx(0.32, abs=1e-12)
@@ -78,8 +80,7 @@ def test_backwards_through_zero_and_negative_counts(tmp_path):
     right = [(k * S + 1, 10 - 5 * k) for k in range(6)]
     track = replay_odometry(
         write_encoders(tmp_path / "back.bag", left, right),
-        delta_phi,
-        estimate_pose,
+        bagtools,
         start=(0.0, 0.0, 0.0),
     )
     assert track.final_pose[0] == pytest.approx(-25 * REVOLUTION / 135)
@@ -89,16 +90,25 @@ def test_one_wheel_reporting_several_times_is_accumulated(tmp_path):
     # The left wheel reports three times (+10 each) before the right reports once (+30).
     left = [(0, 0), (S, 10), (2 * S, 20), (3 * S, 30)]
     right = [(0, 0), (3 * S + 1, 30)]
-    calls = []
+    readings = []
 
-    def spy(ticks, prev_ticks, resolution):
-        calls.append((ticks, prev_ticks))
-        return delta_phi(ticks, prev_ticks, resolution)
+    class Spy(bagtools.WheelPairing):
+        def add(self, wheel, ticks):
+            readings.append((wheel, ticks))
+            return super().add(wheel, ticks)
 
+    solution = {**vars(bagtools), "WheelPairing": Spy}
     track = replay_odometry(
-        write_encoders(tmp_path / "acc.bag", left, right), spy, estimate_pose, start=(0, 0, 0)
+        write_encoders(tmp_path / "acc.bag", left, right), solution, start=(0, 0, 0)
     )
-    assert calls == [(30, 0), (30, 0)], "one update, with the left wheel's whole change"
+    assert readings == [
+        ("left", 0),
+        ("right", 0),
+        ("left", 10),
+        ("left", 20),
+        ("left", 30),
+        ("right", 30),
+    ], "every reading, in time order, the left wheel first at equal times"
     assert track.final_pose == pytest.approx((30 * REVOLUTION / 135, 0.0, 0.0))
     assert len(track) == 2
 
@@ -108,8 +118,7 @@ def test_streams_of_unequal_length(tmp_path):
     right = [(k * 3 * S + 1, 3 * k) for k in range(3)]  # a third as many
     track = replay_odometry(
         write_encoders(tmp_path / "uneq.bag", left, right),
-        delta_phi,
-        estimate_pose,
+        bagtools,
         start=(0, 0, 0),
     )
     assert len(track) == 3, "the start and two paired updates"
@@ -121,15 +130,22 @@ def test_errors_name_the_problem(tmp_path):
     with BagWriter(strings) as writer:
         writer.write("/chatter", String("hi"), 5)
     with pytest.raises(BagError, match="needs one left encoder topic"):
-        replay_odometry(strings, delta_phi, estimate_pose)
+        replay_odometry(strings, bagtools)
     path = write_encoders(tmp_path / "e.bag", [(0, 0), (S, 5)], [(1, 0), (S + 1, 5)])
 
-    def unfinished(ticks, prev_ticks, resolution):
+    def unfinished(R, baseline, x_prev, y_prev, theta_prev, delta_phi_left, delta_phi_right):  # noqa: N803
         raise NotImplementedError
 
-    with pytest.raises(DuckielibError, match=r"delta_phi .* is not implemented yet"):
-        replay_odometry(path, unfinished, estimate_pose)
-    with pytest.raises(DuckielibError, match="must return two values"):
-        replay_odometry(path, lambda *args: 1.0, estimate_pose)
+    with pytest.raises(SolutionError, match=r"05_odometry: estimate_pose is not implemented"):
+        replay_odometry(path, {**vars(bagtools), "estimate_pose": unfinished})
+
+    class Single(bagtools.WheelPairing):
+        def add(self, wheel, ticks):
+            return 1.0
+
+    with pytest.raises(SolutionError, match="must return None or two numbers"):
+        replay_odometry(path, {**vars(bagtools), "WheelPairing": Single})
+    with pytest.raises(SolutionError, match="Finish notebook 05_odometry: the solution has no"):
+        replay_odometry(path, {"delta_phi": bagtools.delta_phi})
     with pytest.raises(BagError, match="time_base must be one of"):
         read_encoders(path, time_base="wall")

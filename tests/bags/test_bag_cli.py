@@ -57,6 +57,11 @@ def test_odometry_prints_the_final_pose_and_json(encoders):
     assert pose == pytest.approx({"x": travelled, "y": 0.0, "theta": 0.0}, abs=1e-9)
     text = duckie("odometry", encoders, "--solution", SOLUTION).stdout
     assert "final pose: x = 0.3200 m" in text
+    reference = duckie("odometry", encoders, "--json", "--start", 0, 0, 0)
+    assert reference.returncode == 0, reference.stderr
+    assert json.loads(reference.stdout) == pytest.approx(pose, abs=1e-12), (
+        "without --solution, the course's reference solution replays the same odometry"
+    )
 
 
 def test_plot_writes_a_figure(tmp_path):
@@ -105,9 +110,9 @@ def test_bad_input_gets_one_line_and_status_1(tmp_path, encoders):
         duckie("plot", encoders, "-o", tmp_path / "x.png", "--topic", "/nope"),
         "has no topic /nope",
     )
-    assert_one_line_error(duckie("odometry", encoders), "--solution")
     assert_one_line_error(
-        duckie("odometry", encoders, "--solution", tmp_path / "none.py"), "no solution file"
+        duckie("odometry", encoders, "--solution", tmp_path / "none.py"),
+        "no solution file or folder",
     )
     assert_one_line_error(duckie("plot", encoders, "-o", tmp_path / "x.png"), "Pose2DStamped")
     assert_one_line_error(

@@ -20,6 +20,7 @@ import pytest
 from duckielib.bags import Bag, BagWriter, repair_bag, replay_odometry
 from duckielib.messages import Header, Pose2DStamped, String, WheelEncoderStamped
 from duckielib.rostime import Time
+from duckielib.solution import load_solution
 
 pytestmark = pytest.mark.ros
 
@@ -200,23 +201,6 @@ def encoder_readings(count: int) -> list:
     return readings
 
 
-def odometry_functions():
-    """The classic odometry functions of the course (defined here, not in the library)."""
-
-    def delta_phi(ticks, prev_ticks, resolution):
-        return 2 * math.pi * (ticks - prev_ticks) / resolution, ticks
-
-    def estimate_pose(R, baseline, x, y, theta, dphi_left, dphi_right):  # noqa: N803
-        d_left, d_right = R * dphi_left, R * dphi_right
-        d = (d_left + d_right) / 2
-        x += d * math.cos(theta)
-        y += d * math.sin(theta)
-        theta = (theta + (d_right - d_left) / baseline) % (2 * math.pi)
-        return x, y, theta
-
-    return delta_phi, estimate_pose
-
-
 def mixed_messages() -> list:
     """(topic, record ns, message) on two encoder topics, a pose topic and a string topic."""
     written = [
@@ -340,9 +324,9 @@ def test_we_read_rosbags_bag(debian_bags, tmp_path, compression):
             writer.write(topic, String(data=text), time_ns)
     finally:
         writer.close()
-    delta_phi, estimate_pose = odometry_functions()
-    theirs_track = replay_odometry(bag, delta_phi, estimate_pose)
-    ours_track = replay_odometry(Bag(ours), delta_phi, estimate_pose)
+    solution = load_solution()  # the course's reference, exported from solutions/
+    theirs_track = replay_odometry(bag, solution)
+    ours_track = replay_odometry(Bag(ours), solution)
     assert len(theirs_track) == len(ours_track) > 250
     assert theirs_track.final_pose == ours_track.final_pose
     for name in ("t", "x", "y", "theta"):
