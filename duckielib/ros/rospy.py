@@ -569,6 +569,11 @@ class Subscriber:
         for data in self._record.latched.values():
             self._enqueue(data)
 
+    @property
+    def node(self) -> Node:
+        """The node that owns this subscriber."""
+        return self._node
+
     def _enqueue(self, data: bytes) -> None:
         if self._queue.maxlen is not None and len(self._queue) == self._queue.maxlen:
             self.dropped += 1

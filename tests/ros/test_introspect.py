@@ -57,8 +57,21 @@ def test_rostopic_list_type_info(graph):
         "Type: duckietown_msgs/WheelEncoderStamped\n\n"
         "Publishers:\n * /duckiebot/left_wheel_encoder_node\n\nSubscribers:\n None"
     )
+    assert rostopic.info("/chatter") == (
+        "Type: std_msgs/String\n\nPublishers:\n None\n\n"
+        "Subscribers:\n * /duckiebot/led_emitter_node"
+    )
     with pytest.raises(rospy.ROSException, match="Unknown topic /tick: no node publishes"):
         rostopic.info("/tick")
+
+
+def test_a_second_type_on_a_subscribed_topic_is_refused(graph):
+    rospy.init_node("talker")
+    with pytest.raises(
+        rospy.ROSException,
+        match=r"/chatter carries std_msgs/String \(used by /duckiebot/led_emitter_node\)",
+    ):
+        rospy.Publisher("/chatter", WheelEncoderStamped, queue_size=1)
 
 
 def test_rostopic_echo_runs_the_graph(graph):
