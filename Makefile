@@ -7,6 +7,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+# Jupyter refuses to run as root unless told; LAB_ARGS passes more options (--port=8890 ...).
+LAB_ROOT := $(shell [ "$$(id -u)" = 0 ] && echo --allow-root)
+LAB_ARGS ?=
 
 # Debian's ROS 1 (rospy, roscore, rosbag, genpy, message packages) and bubblewrap, the sandbox
 # the autograder runs student code in.
@@ -40,7 +43,7 @@ test: $(STAMP)
 
 lab: $(STAMP)
 	@test -d course || { echo "course/ has no released notebooks yet: see the README's status section."; exit 1; }
-	$(BIN)/jupyter lab --notebook-dir=course
+	$(BIN)/jupyter lab --notebook-dir=course $(LAB_ROOT) $(LAB_ARGS)
 
 ros:
 	$(SUDO) apt-get update

@@ -195,13 +195,20 @@ class Export:
         """What is done and what is left, by notebook, in a few lines."""
         done = len(CONTRACT) - len(self.missing) - len(self.unfinished)
         lines = [f"{done} of {len(CONTRACT)} graded parts exported."]
-        by_notebook: Dict[str, List[str]] = {}
-        for name in self.missing:
-            by_notebook.setdefault(CONTRACT[name].notebook, []).append(f"{name} is missing")
+        todo: Dict[str, Dict[str, List[str]]] = {}
         for name in self.unfinished:
-            by_notebook.setdefault(CONTRACT[name].notebook, []).append(f"{name} is not written yet")
-        for notebook in sorted(by_notebook):
-            lines.append(f"Finish notebook {notebook}: {'; '.join(by_notebook[notebook])}.")
+            todo.setdefault(CONTRACT[name].notebook, {}).setdefault("write", []).append(name)
+        for name in self.missing:
+            todo.setdefault(CONTRACT[name].notebook, {}).setdefault("define", []).append(name)
+        for notebook in sorted(todo):
+            steps = []
+            if "write" in todo[notebook]:
+                steps.append(f"write {', '.join(todo[notebook]['write'])}")
+            if "define" in todo[notebook]:
+                steps.append(
+                    f"define {', '.join(todo[notebook]['define'])} in a cell tagged {EXPORT_TAG!r}"
+                )
+            lines.append(f"Finish notebook {notebook}: {'; '.join(steps)}.")
         lines.extend(self.problems)
         return "\n".join(lines)
 

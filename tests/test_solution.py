@@ -98,7 +98,7 @@ def test_export_keeps_definitions_and_drops_exploration(tmp_path):
     assert export.missing == [name for name in CONTRACT if name not in export.found]
     report = export.report()
     assert report.startswith(f"3 of {len(CONTRACT)} graded parts exported.")
-    assert "Finish notebook 03_frames: wrap_angle is missing;" in report
+    assert "Finish notebook 03_frames: define wrap_angle, rotation_matrix," in report
     assert not export.complete
     compile(export.source, "solution.py", "exec")
 
@@ -112,9 +112,7 @@ def test_unwritten_functions_and_classes_are_reported(tmp_path):
     folder = odometry_course(tmp_path / "course", pairing=released_class, delta=UNWRITTEN)
     export = export_solution(folder)
     assert export.unfinished == ["delta_phi", "WheelPairing"]
-    assert "Finish notebook 05_odometry: delta_phi is not written yet; WheelPairing" in (
-        export.report()
-    )
+    assert "Finish notebook 05_odometry: write delta_phi, WheelPairing." in (export.report())
     with pytest.raises(SolutionError, match="fails to import"):
         load_solution(folder)  # the released class body raises when it is defined
 
@@ -201,7 +199,7 @@ def test_duckie_export_writes_the_module_and_reports(tmp_path):
     result = run_duckie("export", folder, "-o", output)
     assert result.returncode == 0, result.stderr
     assert f"3 of {len(CONTRACT)} graded parts exported." in result.stdout
-    assert "Finish notebook 04_kinematics: forward_kinematics is missing" in result.stdout
+    assert "Finish notebook 04_kinematics: define forward_kinematics," in result.stdout
     assert output.read_text() == export_solution(folder).source
     assert load_solution(output).estimate_pose(0.03, 0.1, 0, 0, 0, 0, 0) == (0.0, 0.0, 0.0)
 
