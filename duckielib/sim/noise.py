@@ -4,8 +4,10 @@ A :class:`NoiseProfile` is a frozen set of the imperfections the simulator repro
 profiles are named:
 
 - :meth:`NoiseProfile.ideal`: equal wheels, tyres that never slip, encoders sampled on a perfectly
-  regular schedule, any PWM out of the dead zone turns a wheel. Odometry from the ticks matches
-  the ground truth up to tick quantisation.
+  regular schedule, any PWM out of the dead zone turns a wheel. Each wheel's ticks match its
+  travel up to quantisation; odometry still drifts a little, as on any robot, because the two
+  wheels are sampled at different instants and a wheel that coasts after its command changed
+  sign counts by the new sign (the real encoder driver's rule).
 - :meth:`NoiseProfile.realistic`: the right wheel is 3 % weaker than the left (so trim matters),
   tyres slip when asked for more than the mat's friction gives (hard starts and stops), encoder
   samples come a few milliseconds late or early, and a wheel at rest needs a bit more than the

@@ -12,7 +12,7 @@ and the true distance and turn; the "stop" legs show how far the robot coasts, a
 wheel coasting backwards after a turn counts up (the encoder takes its sign from the last
 command). With the ideal profile counts and travel agree to a tick and the square closes
 within a few centimetres; with the realistic one the weaker right wheel bends the straight
-legs, hard starts make the tyres slip (more ticks than travel) and the square does not close.
+legs and the square does not close (slip shows only in harder starts and reversals than these).
 """
 
 from __future__ import annotations
