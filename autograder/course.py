@@ -219,6 +219,7 @@ def autograde(
         CourseError: if nbgrader fails on a submission (not if the student's code fails).
     """
     work = Path(work).resolve()
+    work.mkdir(parents=True, exist_ok=True)
     source = Path(source).resolve()
     names = list(names) if names is not None else assignments(source)
     config = nbgrader_config(root=work, release="release", db=work / "gradebook.db", source=source)

@@ -226,3 +226,18 @@ def test_duckie_export_errors_are_one_line(tmp_path, args, message):
     assert "Traceback" not in result.stderr
     assert len(result.stderr.strip().splitlines()) == 1
     assert not list(tmp_path.glob("*.py*"))
+
+
+def test_the_library_defines_no_graded_part():
+    import importlib
+    import pkgutil
+
+    import duckielib
+
+    offenders = []
+    for module_info in pkgutil.walk_packages(duckielib.__path__, "duckielib."):
+        if ".examples." in module_info.name or module_info.name.endswith("__main__"):
+            continue
+        module = importlib.import_module(module_info.name)
+        offenders += [f"{module_info.name}.{name}" for name in CONTRACT if hasattr(module, name)]
+    assert offenders == [], "students receive duckielib: it must not hold their answers"

@@ -38,7 +38,6 @@ __all__ = [
     "Motor",
     "Robot",
     "pwm_from_duty",
-    "wrap_angle",
     "MOTOR_TIME_CONSTANT_S",
     "WHEEL_LOAD_FRACTION",
     "GRAVITY",
@@ -105,8 +104,11 @@ class Twist(NamedTuple):
     v_lateral: float
 
 
-def wrap_angle(angle: float) -> float:
-    """``angle`` (radians) wrapped to [0, 2*pi)."""
+def _heading_of(angle: float) -> float:
+    """The ground truth's heading in [0, 2*pi) of a body's unbounded ``angle`` (radians).
+
+    Internal to the simulator: students write their own angle wrap in notebook 03.
+    """
     wrapped = angle % math.tau
     # A tiny negative angle wraps to exactly 2*pi in floating point.
     return 0.0 if wrapped >= math.tau else wrapped
@@ -269,7 +271,7 @@ class Robot:
     def pose(self) -> Pose:
         """The true pose of the axle midpoint in the world frame, theta in [0, 2*pi)."""
         x, y = self.body.position
-        return Pose(x, y, wrap_angle(self.body.angle))
+        return Pose(x, y, _heading_of(self.body.angle))
 
     @property
     def twist(self) -> Twist:

@@ -31,7 +31,7 @@ from duckielib.config import DB21, RobotConfig
 from duckielib.errors import ConfigError, SimulationError
 from duckielib.sim.encoders import Encoder, EncoderReading
 from duckielib.sim.noise import NoiseProfile, noise_profile
-from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, Pose, Robot, Twist, wrap_angle
+from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, Pose, Robot, Twist, _heading_of
 from duckielib.sim.world import World, build_space, space_stepper
 
 if TYPE_CHECKING:
@@ -291,7 +291,7 @@ class Simulator:
         trace.times.append(self.time)
         trace.xs.append(x)
         trace.ys.append(y)
-        trace.thetas.append(wrap_angle(body.angle))
+        trace.thetas.append(_heading_of(body.angle))
 
     # Wheels and encoders.
 

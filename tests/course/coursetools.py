@@ -1,0 +1,69 @@
+"""Helpers for the course gates: the notebooks' cells by kind, and the wrong solutions."""
+
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from autograder.course import ROOT, assignments
+
+SOLUTIONS = ROOT / "solutions"
+COURSE = ROOT / "course"
+NAMES = assignments(SOLUTIONS)
+
+SOLUTION_REGION = re.compile(r"### BEGIN SOLUTION\n(.*?)### END SOLUTION", re.S)
+HIDDEN_REGION = re.compile(r"### BEGIN HIDDEN TESTS\n(.*?)### END HIDDEN TESTS", re.S)
+
+
+def notebook_path(folder: Path, name: str) -> Path:
+    return folder / name / f"{name}.ipynb"
+
+
+def load(path: Path) -> dict:
+    return json.loads(path.read_text(encoding="utf-8"))
+
+
+def source(cell: dict) -> str:
+    text = cell.get("source", "")
+    return "".join(text) if isinstance(text, list) else text
+
+
+def nbgrader(cell: dict) -> dict:
+    return cell.get("metadata", {}).get("nbgrader", {})
+
+
+def graded_cells(notebook: dict) -> dict:
+    """The cells students write, by grade_id."""
+    return {
+        nbgrader(cell)["grade_id"]: cell
+        for cell in notebook["cells"]
+        if nbgrader(cell).get("solution") and not nbgrader(cell).get("grade")
+    }
+
+
+def checking_cells(notebook: dict) -> dict:
+    """The autograded test cells, by grade_id."""
+    return {
+        nbgrader(cell)["grade_id"]: cell
+        for cell in notebook["cells"]
+        if nbgrader(cell).get("grade") and not nbgrader(cell).get("solution")
+    }
+
+
+def wrong_solutions() -> dict:
+    """Every deliberately wrong solution: ``(notebook, grade_id, mistake) -> cell source``."""
+    found = {}
+    for path in sorted(Path(__file__).parent.glob("wrong_*.py")):
+        namespace: dict = {}
+        exec(compile(path.read_text(encoding="utf-8"), str(path), "exec"), namespace)
+        for grade_id, mistakes in namespace["WRONG"].items():
+            owner = [name for name in NAMES if grade_id in graded_cells(load_solution_nb(name))]
+            assert len(owner) == 1, f"{path.name}: {grade_id} is graded in {owner or 'no'} notebook"
+            for mistake, text in mistakes.items():
+                found[(owner[0], grade_id, mistake)] = text
+    return found
+
+
+def load_solution_nb(name: str) -> dict:
+    return load(notebook_path(SOLUTIONS, name))

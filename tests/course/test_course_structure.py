@@ -1,0 +1,190 @@
+"""Gates on the course's files: a fresh release, no leaks, well-formed grade cells, the contract."""
+
+from __future__ import annotations
+
+import ast
+import re
+
+import pytest
+from coursetools import (
+    COURSE,
+    HIDDEN_REGION,
+    NAMES,
+    SOLUTION_REGION,
+    SOLUTIONS,
+    checking_cells,
+    graded_cells,
+    load,
+    load_solution_nb,
+    nbgrader,
+    notebook_path,
+    source,
+)
+
+from autograder.course import compare_release
+from duckielib.solution import CONTRACT, EXPORT_TAG, export_solution, load_solution
+
+EXPECTED = ["01_getting_started", "02_ros_concepts", "03_frames", "04_kinematics", "05_odometry"]
+
+
+def test_the_course_has_its_notebooks_in_order():
+    assert NAMES[: len(EXPECTED)] == EXPECTED
+
+
+def test_course_is_byte_identical_to_a_fresh_release():
+    assert compare_release() == [], "run 'duckie release' and commit course/"
+
+
+def test_course_holds_only_the_student_notebooks():
+    files = sorted(p.relative_to(COURSE).as_posix() for p in COURSE.rglob("*") if p.is_file())
+    assert files == [f"{name}/{name}.ipynb" for name in NAMES]
+
+
+def test_no_solution_line_or_hidden_test_reaches_the_course():
+    released = "\n".join(
+        path.read_text(encoding="utf-8") for path in COURSE.rglob("*") if path.is_file()
+    )
+    released_lines = {
+        line.strip()
+        for path in COURSE.rglob("*.ipynb")
+        for cell in load(path)["cells"]
+        for line in source(cell).splitlines()
+    }
+    public, secret = set(), {}
+    for name in NAMES:
+        for cell in load_solution_nb(name)["cells"]:
+            text = source(cell)
+            regions = SOLUTION_REGION.findall(text) + HIDDEN_REGION.findall(text)
+            for region in regions:
+                for line in region.splitlines():
+                    secret.setdefault(line.strip(), name)
+            outside = SOLUTION_REGION.sub("", HIDDEN_REGION.sub("", text))
+            public |= {line.strip() for line in outside.splitlines()}
+    # Lines the course shows anyway, and bare syntax ("pass", "]", "else:"), give nothing away.
+    leaks = [
+        f"{name}: {line}"
+        for line, name in sorted(secret.items())
+        if line not in public and len(line.replace(" ", "")) >= 8 and line in released_lines
+    ]
+    assert not leaks, "solution or hidden-test lines in course/:\n" + "\n".join(leaks)
+    assert "BEGIN HIDDEN TESTS" not in released
+    assert "BEGIN SOLUTION" not in released
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_source_notebooks_are_clean(name):
+    notebook = load_solution_nb(name)
+    assert notebook["metadata"]["kernelspec"]["name"] == "python3"
+    for cell in notebook["cells"]:
+        if cell["cell_type"] == "code":
+            assert cell["outputs"] == [], f"{name}: outputs must be stripped"
+            assert cell["execution_count"] is None
+            assert "sys.path" not in source(cell)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_grade_cells_have_points_ids_and_tests(name):
+    notebook = load_solution_nb(name)
+    ids = [nbgrader(cell)["grade_id"] for cell in notebook["cells"] if nbgrader(cell)]
+    assert len(ids) == len(set(ids)), f"{name}: duplicate grade ids"
+    tests = checking_cells(notebook)
+    for grade_id, cell in tests.items():
+        assert nbgrader(cell)["points"] > 0, f"{name}: {grade_id} has no points"
+        assert nbgrader(cell)["locked"], f"{name}: {grade_id} must be locked"
+    for grade_id, cell in graded_cells(notebook).items():
+        assert f"test_{grade_id}" in tests, f"{name}: {grade_id} has no test cell"
+        text = source(cell)
+        assert SOLUTION_REGION.search(text), f"{name}: {grade_id} has no solution region"
+        assert HIDDEN_REGION.search(source(tests[f"test_{grade_id}"])), (
+            f"{name}: test_{grade_id} has no hidden tests"
+        )
+
+
+def test_all_grade_ids_are_unique_across_the_course():
+    ids = [
+        nbgrader(cell)["grade_id"]
+        for name in NAMES
+        for cell in load_solution_nb(name)["cells"]
+        if nbgrader(cell)
+    ]
+    assert len(ids) == len(set(ids))
+
+
+def test_every_contract_part_is_an_exported_graded_cell_of_its_notebook():
+    for part in CONTRACT.values():
+        if part.notebook not in NAMES:
+            continue
+        cells = graded_cells(load_solution_nb(part.notebook))
+        assert part.name in cells, f"{part.notebook} grades no cell {part.name}"
+        assert EXPORT_TAG in cells[part.name]["metadata"].get("tags", []), part.name
+        tree = ast.parse(source(cells[part.name]))
+        defined = [node.name for node in tree.body if hasattr(node, "name")]
+        assert part.name in defined
+
+
+def test_exported_cells_use_only_math_numpy_and_the_standard_library():
+    allowed = re.compile(r"^(import (math|os)|import numpy as np|from typing import .*)$")
+    for name in NAMES:
+        for cell in load_solution_nb(name)["cells"]:
+            if EXPORT_TAG not in cell["metadata"].get("tags", []):
+                continue
+            for line in source(cell).splitlines():
+                if line.startswith(("import ", "from ")):
+                    assert allowed.match(line), f"{name}: exported cell imports {line!r}"
+
+
+def test_the_reference_solution_is_complete_and_the_release_is_not():
+    reference = export_solution(SOLUTIONS)
+    assert reference.complete, reference.report()
+    module = load_solution(required=list(CONTRACT))
+    assert module.wrap_angle(-0.5) == pytest.approx(2 * 3.141592653589793 - 0.5)
+    released = export_solution(COURSE)
+    assert released.missing == [p for p in CONTRACT if CONTRACT[p].notebook not in NAMES]
+    assert released.unfinished == [p for p in CONTRACT if CONTRACT[p].notebook in NAMES]
+    assert (
+        "Finish notebook 05_odometry: write delta_phi, estimate_pose, WheelPairing."
+        in released.report()
+    )
+
+
+def test_released_graded_cells_keep_signature_and_docstring():
+    for name in NAMES:
+        solution_cells = graded_cells(load_solution_nb(name))
+        released = graded_cells(load(notebook_path(COURSE, name)))
+        assert set(released) == set(solution_cells)
+        for grade_id, cell in released.items():
+            text = source(cell)
+            assert "raise NotImplementedError()" in text, f"{name}: {grade_id}"
+            before = SOLUTION_REGION.split(source(solution_cells[grade_id]))[0]
+            assert text.startswith(before), f"{name}: {grade_id} lost its signature"
+
+
+def test_a_stale_release_is_named_file_by_file(tmp_path):
+    import shutil
+
+    stale = tmp_path / "course"
+    shutil.copytree(COURSE, stale)
+    first = notebook_path(stale, NAMES[0])
+    first.write_text(first.read_text(encoding="utf-8").replace("Duckiebot", "Duckybot", 1))
+    (stale / "notes.txt").write_text("mine")
+    shutil.rmtree(stale / NAMES[-1])
+    differences = compare_release(stale)
+    assert differences == [
+        f"{NAMES[0]}/{NAMES[0]}.ipynb differs from a fresh release.",
+        f"{NAMES[-1]}/{NAMES[-1]}.ipynb is missing from course/.",
+        "notes.txt is in course/ but not in a fresh release.",
+    ]
+
+
+def test_duckie_release_check_passes_on_the_committed_course():
+    import subprocess
+    import sys
+
+    result = subprocess.run(
+        [sys.executable, "-m", "duckielib.cli", "release", "--check"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert "identical to a fresh release" in result.stdout
