@@ -1,0 +1,93 @@
+"""Missions as data: the exercise's task and its D variant, checked move by move."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from duckielib.errors import ConfigError
+from duckielib.missions import (
+    D_SHAPE,
+    MISSIONS,
+    SQUARE_THEN_CIRCLE,
+    TASK_START,
+    Arc,
+    ReturnToStart,
+    Rotate,
+    State,
+    Stop,
+    Straight,
+    mission_named,
+)
+
+
+def follow(moves, pose):
+    """Where ideal moves take a pose (the test's own geometry; ReturnToStart is skipped)."""
+    x, y, theta = pose
+    for move in moves:
+        if isinstance(move, Straight):
+            x, y = x + move.distance * math.cos(theta), y + move.distance * math.sin(theta)
+        elif isinstance(move, Rotate):
+            theta += move.angle
+        elif isinstance(move, Arc):
+            side = math.copysign(1.0, move.angle)  # +1 centre on the left, -1 on the right
+            cx = x - side * move.radius * math.sin(theta)
+            cy = y + side * move.radius * math.cos(theta)
+            theta += move.angle
+            x = cx + side * move.radius * math.sin(theta)
+            y = cy - side * move.radius * math.cos(theta)
+    return x, y, theta % (2 * math.pi)
+
+
+def test_the_square_then_circle_task_follows_the_exercise():
+    mission = SQUARE_THEN_CIRCLE
+    assert mission.start == TASK_START == (0.32, 0.32, math.pi / 2)
+    assert [state.name for state in mission.states] == [
+        "wait",
+        "square",
+        "wait",
+        "return",
+        "wait",
+        "circle",
+    ]
+    assert [state.stop_seconds for state in mission.states if state.is_stop] == [5.0] * 3
+    assert mission.colors == ("RED", "GREEN", "RED", "BLUE", "RED", "YELLOW")
+    square = mission.states[1].moves
+    assert square[0] == Rotate(-math.pi / 2), "the square starts with a clockwise quarter turn"
+    x, y, theta = follow(square, mission.start)
+    assert (x, y) == (pytest.approx(0.32), pytest.approx(1.57)), "three sides, the last one back"
+    assert theta == pytest.approx(math.pi)
+    assert mission.states[3].moves == (ReturnToStart(),)
+    circle = mission.states[5].moves
+    assert follow(circle, mission.start) == pytest.approx(mission.start)
+    assert circle[0].angle < 0, "the circle is clockwise"
+
+
+def test_the_d_closes_where_it_began_and_stays_on_the_mat():
+    moves = D_SHAPE.states[1].moves
+    assert follow(moves, D_SHAPE.start) == pytest.approx(D_SHAPE.start)
+    arcs = [move for move in moves if isinstance(move, Arc)]
+    assert [arc.angle for arc in arcs] == [-math.pi / 2] * 2, "two clockwise quarter arcs"
+    pose = D_SHAPE.start
+    for move in moves:
+        pose = follow([move], pose)
+        assert 0.1 < pose[0] < 2.24, f"{move} leaves the mat"
+        assert 0.1 < pose[1] < 2.24, f"{move} leaves the mat"
+
+
+def test_missions_by_name_and_the_students_stop_colour():
+    assert set(MISSIONS) == {"square_then_circle", "d_shape"}
+    assert mission_named("d_shape") is D_SHAPE
+    with pytest.raises(ConfigError, match="no mission 'square'; choose one of d_shape, square"):
+        mission_named("square")
+    purple = SQUARE_THEN_CIRCLE.with_stop_color("BLUE")
+    assert purple.colors == ("BLUE", "GREEN", "BLUE", "BLUE", "BLUE", "YELLOW")
+    assert purple.states[1] is SQUARE_THEN_CIRCLE.states[1]
+
+
+def test_states_refuse_unknown_colours_and_moves():
+    with pytest.raises(ConfigError, match="'MAUVE' is not an LED pattern"):
+        State("wait", "MAUVE", (Stop(5.0),))
+    with pytest.raises(ConfigError, match="is not a move"):
+        State("wait", "RED", ("stop",))
