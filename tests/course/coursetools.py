@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import re
 from pathlib import Path
@@ -53,17 +54,23 @@ def checking_cells(notebook: dict) -> dict:
 
 def wrong_solutions() -> dict:
     """Every deliberately wrong solution: ``(notebook, grade_id, mistake) -> cell source``."""
+    owners: dict = {}
+    for name in NAMES:
+        for grade_id in graded_cells(load_solution_nb(name)):
+            owners.setdefault(grade_id, []).append(name)
     found = {}
     for path in sorted(Path(__file__).parent.glob("wrong_*.py")):
         namespace: dict = {}
         exec(compile(path.read_text(encoding="utf-8"), str(path), "exec"), namespace)
         for grade_id, mistakes in namespace["WRONG"].items():
-            owner = [name for name in NAMES if grade_id in graded_cells(load_solution_nb(name))]
+            owner = owners.get(grade_id, [])
             assert len(owner) == 1, f"{path.name}: {grade_id} is graded in {owner or 'no'} notebook"
             for mistake, text in mistakes.items():
                 found[(owner[0], grade_id, mistake)] = text
     return found
 
 
+@functools.lru_cache(maxsize=None)
 def load_solution_nb(name: str) -> dict:
+    """A notebook of solutions/, read once (callers must not change it)."""
     return load(notebook_path(SOLUTIONS, name))
