@@ -145,10 +145,66 @@ CONTRACT: Dict[str, Part] = _parts(
         "pairs the two wheels' readings into (delta_phi_left, delta_phi_right) updates",
         methods=(("add", ("wheel", "ticks")),),
     ),
+    Part(
+        "angle_error",
+        "06_driving",
+        ("target", "theta"),
+        "the signed turn from heading theta to heading target, radians in [-pi, pi)",
+    ),
+    Part(
+        "distance_along",
+        "06_driving",
+        ("start", "pose"),
+        "how far pose is from start along start's heading, in metres (negative: behind)",
+    ),
+    Part(
+        "AngleTracker",
+        "06_driving",
+        ("theta0",),
+        "the total angle turned since heading theta0, in radians, across the wrap at 2 pi",
+        methods=(("update", ("theta",)),),
+    ),
+    Part(
+        "PID",
+        "07_control",
+        ("kp", "ki", "kd", "limit"),
+        "a discrete PID controller with an output limit and anti-windup",
+        methods=(("update", ("error", "dt")), ("reset", ())),
+    ),
+    Part(
+        "go_to_point",
+        "07_control",
+        ("pose", "target", "v_max", "k_omega"),
+        "the command (v in m/s, omega in rad/s) that drives from pose towards a point",
+    ),
+    Part(
+        "light_service_node",
+        "08_leds",
+        (),
+        "a node offering ~set_color (ChangePattern) that sets the LEDs through the emitter",
+    ),
+    Part(
+        "mission_node",
+        "09_mission",
+        ("mission",),
+        "a node that carries out a mission state by state, each with its LED colour",
+    ),
 )
 
 #: The parts the odometry runners need.
 ODOMETRY_PARTS = ("delta_phi", "estimate_pose", "WheelPairing")
+
+#: What a mission needs: the odometry, the driving and control parts, and the two nodes.
+MISSION_PARTS = (
+    *ODOMETRY_PARTS,
+    "angle_error",
+    "distance_along",
+    "AngleTracker",
+    "PID",
+    "go_to_point",
+    "light_service_node",
+    "mission_node",
+)
 
 
 class SolutionError(DuckielibError):
@@ -417,6 +473,11 @@ def _module_from_source(source: str, filename: str) -> types.ModuleType:
     # Registering the text lets tracebacks show the student's lines.
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
     sys.modules[name] = module
+    # Node parts import rospy and the message packages, as on the robot; in-process they are
+    # served by duckielib's graph (a real ROS installation on the path is used instead).
+    from duckielib.ros.modules import install_modules
+
+    install_modules()
     try:
         exec(compile(source, filename, "exec"), module.__dict__)
     except Exception as error:
@@ -448,6 +509,14 @@ def load_solution(
     folder = reference_solution_dir() if path is None else Path(path)
     if folder.is_dir():
         export = export_solution(folder)
+        unfinished = [name for name in required if name in export.unfinished]
+        if unfinished:
+            first = CONTRACT[unfinished[0]]
+            waiting = [name for name in unfinished if CONTRACT[name].notebook == first.notebook]
+            raise SolutionError(
+                f"{_finish(first)}: write {', '.join(waiting)} (their cells still raise "
+                "NotImplementedError), save the notebook, and try again."
+            )
         module = _module_from_source(export.source, f"<solution exported from {folder}>")
     elif folder.is_file():
         if folder.suffix == ".ipynb":
