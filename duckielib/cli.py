@@ -10,7 +10,7 @@ import argparse
 import sys
 from typing import List, Optional
 
-from duckielib.errors import DuckielibError, NotBuiltError
+from duckielib.errors import DuckielibError
 
 __all__ = ["main"]
 
@@ -134,10 +134,21 @@ def _export(args: argparse.Namespace) -> int:
 
 
 def _mission(args: argparse.Namespace) -> int:
-    raise NotBuiltError(
-        "The mission runner (the square-then-circle task in the simulator) is not built yet; "
-        "see the README's status section for what works today."
+    from duckielib.runner import run_mission
+
+    if args.solution is None:
+        print("Using the reference solution (the export of solutions/).", flush=True)
+    run = run_mission(
+        solution=args.solution,
+        mission=args.mission,
+        noise=args.noise,
+        seed=args.seed,
+        out=args.out,
+        stop_color=args.stop_color,
+        animation=not args.no_animation,
     )
+    print(run.text())
+    return 0
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -148,9 +159,30 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     mission = commands.add_parser(
-        "mission", help="drive the square-then-circle task in the simulator"
+        "mission", help="drive a mission (square then circle, or D) on the virtual Duckiebot"
     )
+    mission.add_argument(
+        "--solution",
+        help="your notebooks' folder or a file made by duckie export (default: the reference)",
+    )
+    mission.add_argument(
+        "--mission",
+        default="square_then_circle",
+        choices=("square_then_circle", "d_shape"),
+        help="which mission to drive (default: square_then_circle)",
+    )
+    mission.add_argument(
+        "--noise",
+        default="ideal",
+        choices=("ideal", "realistic"),
+        help="the simulated robot: ideal, or realistic (unequal wheels, slip, dead zone)",
+    )
+    mission.add_argument("--seed", type=int, default=0, help="the simulator's seed (default 0)")
+    mission.add_argument("--stop-color", help="the LED pattern of the stops (default: RED)")
     mission.add_argument("--out", default="runs/latest", help="folder for the bag, plot, summary")
+    mission.add_argument(
+        "--no-animation", action="store_true", help="skip mission.gif (a few seconds faster)"
+    )
     mission.set_defaults(handler=_mission)
 
     export = commands.add_parser(

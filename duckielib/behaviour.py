@@ -1,0 +1,339 @@
+"""What a mission's bag shows the robot did: its states, LED colours, stops and where it ended.
+
+A mission node announces each state by publishing the state's name on ``~state``
+(``std_msgs/String``) when the state starts, and ``"done"`` when the mission is over. The bag
+of the run holds those announcements, the LED emitter's ``led_pattern``, the odometry's pose
+and the simulator's ground truth; :func:`mission_report` reads them and compares them with the
+:class:`~duckielib.missions.Mission` that was asked for. ``duckie mission`` writes the report to
+``summary.json``; notebook 09 and the class grader score a student's mission with it.
+
+The checks are about behaviour, never about how the code is written: the states and colours in
+order, each stop standing still for its time, and the true end near the start.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from duckielib.bags.analysis import PoseTrack, pose_tracks
+from duckielib.bags.io import Bag, PathLike
+from duckielib.leds import PATTERNS
+from duckielib.missions import Mission
+
+__all__ = [
+    "CLOSURE_TOLERANCE_M",
+    "DONE",
+    "STILL_TOLERANCE_M",
+    "STOP_TOLERANCE_S",
+    "MissionReport",
+    "StateRun",
+    "mission_report",
+]
+
+#: What the mission node publishes on ``~state`` when the mission is over.
+DONE = "done"
+
+#: A stop may last this much longer or shorter than asked, in seconds.
+STOP_TOLERANCE_S = 0.5
+
+#: During a stop the robot may move this far (truth), in metres.
+STILL_TOLERANCE_M = 0.01
+
+#: The true end must be this close to the start, in metres.
+CLOSURE_TOLERANCE_M = 0.10
+
+Pose = Tuple[float, float, float]
+
+
+@dataclass
+class StateRun:
+    """One state as the bag shows it.
+
+    Attributes:
+        name: the name the mission node announced.
+        color: the LED pattern shown during the state (``"RED"``; ``"custom"`` or
+            ``"unknown"`` when no named pattern matches).
+        start: when it was announced, in seconds from the mission's start.
+        end: when the next state (or the end) was announced, in seconds.
+        moved: how far the robot really moved during the state, in metres.
+    """
+
+    name: str
+    color: str
+    start: float
+    end: float
+    moved: float
+
+    @property
+    def duration(self) -> float:
+        """How long the state lasted, in seconds."""
+        return self.end - self.start
+
+    def as_dict(self) -> Dict[str, Any]:
+        """The state for ``summary.json``."""
+        return {
+            "name": self.name,
+            "color": self.color,
+            "start": round(self.start, 3),
+            "end": round(self.end, 3),
+            "moved": round(self.moved, 4),
+        }
+
+
+@dataclass
+class MissionReport:
+    """What a mission's run did, and how it compares with the mission asked for.
+
+    Attributes:
+        mission: the mission asked for.
+        states: the states the bag shows, in order.
+        finished: whether the mission node announced the end.
+        total_time: from the first state's start to the end (or the last message), seconds.
+        final_pose_odometry: the last pose of the odometry, (x, y, theta), or None.
+        final_pose_truth: where the robot really was at the end, (x, y, theta), or None.
+        distance_to_start: true end to the mission's start, in metres, or None.
+        problems: what differs from the mission, one sentence each (empty when all is well).
+    """
+
+    mission: Mission
+    states: List[StateRun] = field(default_factory=list)
+    finished: bool = False
+    total_time: float = 0.0
+    final_pose_odometry: Optional[Pose] = None
+    final_pose_truth: Optional[Pose] = None
+    distance_to_start: Optional[float] = None
+    problems: List[str] = field(default_factory=list)
+
+    @property
+    def states_in_order(self) -> bool:
+        """Whether the states' names and colours are the mission's, in order."""
+        expected = [(state.name, state.color) for state in self.mission.states]
+        return [(run.name, run.color) for run in self.states] == expected
+
+    @property
+    def stops_held(self) -> bool:
+        """Whether every stop state lasted its time (within tolerance) and stood still."""
+        if not self.states_in_order:
+            return False
+        return all(
+            _stop_problem(state, run) is None
+            for state, run in zip(self.mission.states, self.states)
+            if state.is_stop
+        )
+
+    @property
+    def closed(self) -> bool:
+        """Whether the true end is within :data:`CLOSURE_TOLERANCE_M` of the start."""
+        return self.distance_to_start is not None and (
+            self.distance_to_start <= CLOSURE_TOLERANCE_M
+        )
+
+    @property
+    def odometry_error(self) -> Optional[Tuple[float, float]]:
+        """(distance in metres, |heading difference| in radians) from odometry to truth."""
+        if self.final_pose_odometry is None or self.final_pose_truth is None:
+            return None
+        (xo, yo, to), (xt, yt, tt) = self.final_pose_odometry, self.final_pose_truth
+        turn = abs((to - tt + math.pi) % (2 * math.pi) - math.pi)
+        return math.hypot(xo - xt, yo - yt), turn
+
+    def as_dict(self) -> Dict[str, Any]:
+        """The report as plain data for ``summary.json``."""
+        error = self.odometry_error
+        return {
+            "mission": self.mission.name,
+            "finished": self.finished,
+            "states": [run.as_dict() for run in self.states],
+            "total_time": round(self.total_time, 3),
+            "final_pose_odometry": _rounded(self.final_pose_odometry),
+            "final_pose_truth": _rounded(self.final_pose_truth),
+            "distance_to_start": _round(self.distance_to_start),
+            "odometry_error": None
+            if error is None
+            else {"distance": round(error[0], 4), "heading": round(error[1], 4)},
+            "checks": {
+                "states_in_order": self.states_in_order,
+                "stops_held": self.stops_held,
+                "closed": self.closed,
+            },
+            "problems": list(self.problems),
+        }
+
+
+def _round(value: Optional[float], digits: int = 4) -> Optional[float]:
+    return None if value is None else round(value, digits)
+
+
+def _rounded(pose: Optional[Pose]) -> Optional[List[float]]:
+    return None if pose is None else [round(value, 4) for value in pose]
+
+
+def _pattern_name(message: Any) -> str:
+    """The named pattern whose colours and blinking an ``LEDPattern`` message shows."""
+    colors = tuple(message.color_list)
+    for name, pattern in PATTERNS.items():
+        if name.islower():
+            continue  # "light_off" is an alias of LIGHT_OFF
+        if tuple(pattern.color_list) == colors and math.isclose(
+            pattern.frequency, message.frequency, abs_tol=1e-3
+        ):
+            return name
+    return "custom" if "custom" in colors else "unknown"
+
+
+def _track(tracks: Sequence[PoseTrack], suffix: str) -> Optional[PoseTrack]:
+    for track in tracks:
+        if track.label.endswith(suffix) and len(track):
+            return track
+    return None
+
+
+def _pose_at(track: PoseTrack, t: float) -> Pose:
+    index = max(0, int(np.searchsorted(track.t, t, side="right")) - 1)
+    return float(track.x[index]), float(track.y[index]), float(track.theta[index])
+
+
+def _moved(track: Optional[PoseTrack], start: float, end: float) -> float:
+    """The largest distance from the pose at ``start`` reached until ``end`` (truth)."""
+    if track is None:
+        return float("nan")
+    inside = (track.t >= start) & (track.t <= end)
+    x0, y0, _ = _pose_at(track, start)
+    if not inside.any():
+        return 0.0
+    return float(np.max(np.hypot(track.x[inside] - x0, track.y[inside] - y0)))
+
+
+def _stop_problem(state: Any, run: StateRun) -> Optional[str]:
+    wanted = state.stop_seconds
+    if abs(run.duration - wanted) > STOP_TOLERANCE_S:
+        return (
+            f"The stop '{run.name}' at {run.start:.1f} s lasted {run.duration:.1f} s instead of "
+            f"{wanted:.1f} s."
+        )
+    if not run.moved <= STILL_TOLERANCE_M:
+        return (
+            f"The robot moved {100 * run.moved:.1f} cm during the stop '{run.name}' at "
+            f"{run.start:.1f} s; the wheels must stand still."
+        )
+    return None
+
+
+def mission_report(
+    bag: Union[Bag, PathLike],
+    mission: Mission,
+    namespace: str = "/duckiebot/",
+    state_topic: Optional[str] = None,
+) -> MissionReport:
+    """Read a mission's bag and say what the robot did compared with ``mission``.
+
+    Args:
+        bag: the bag of the run (a :class:`~duckielib.bags.Bag` or a path). It should hold
+            ``mission_node/state``, ``led_emitter_node/led_pattern``, ``odometry_node/pose``
+            and ``simulator_node/ground_truth_pose`` under ``namespace``.
+        mission: the mission that was asked for.
+        namespace: the robot's namespace, ``/VEH/``.
+        state_topic: where the states were announced (default ``/VEH/mission_node/state``).
+
+    Returns:
+        The report; its ``problems`` say, one sentence each, what differs from the mission.
+
+    Raises:
+        BagError: if the bag cannot be read.
+    """
+    bag = bag if isinstance(bag, Bag) else Bag(bag)
+    namespace = "/" + namespace.strip("/") + "/"
+    state_topic = state_topic or namespace + "mission_node/state"
+    report = MissionReport(mission)
+    topics = set(bag.topics)
+    if state_topic not in topics:
+        report.problems.append(
+            f"The bag has no {state_topic}: the mission node must publish each state's name "
+            "there (std_msgs/String) when the state starts."
+        )
+        announcements: List[Tuple[float, str]] = []
+    else:
+        announcements = [(item.time, item.message.data) for item in bag.read(state_topic)]
+    led_topic = namespace + "led_emitter_node/led_pattern"
+    leds = (
+        [(item.time, _pattern_name(item.message)) for item in bag.read(led_topic)]
+        if led_topic in topics
+        else []
+    )
+    tracks = pose_tracks(bag, "record")
+    truth = _track(tracks, "ground_truth_pose")
+    odometry = _track(tracks, "odometry_node/pose")
+
+    t0 = announcements[0][0] if announcements else 0.0
+    done = [t for t, name in announcements if name == DONE]
+    report.finished = bool(done)
+    states = [(t, name) for t, name in announcements if name != DONE]
+    last_time = bag_end = max(
+        [t for t, _ in announcements]
+        + [float(track.t[-1]) for track in (truth, odometry) if track is not None]
+        + [0.0]
+    )
+    end_time = done[0] if done else bag_end
+    for index, (start, name) in enumerate(states):
+        end = states[index + 1][0] if index + 1 < len(states) else end_time
+        middle = (start + end) / 2
+        shown = [color for t, color in leds if t <= middle]
+        report.states.append(
+            StateRun(
+                name=name,
+                color=shown[-1] if shown else "unknown",
+                start=start - t0,
+                end=end - t0,
+                moved=_moved(truth, start, end),
+            )
+        )
+    report.total_time = (end_time - t0) if announcements else 0.0
+    if odometry is not None:
+        report.final_pose_odometry = _pose_at(odometry, last_time)
+    if truth is not None:
+        report.final_pose_truth = _pose_at(truth, last_time)
+        x, y, _ = report.final_pose_truth
+        report.distance_to_start = math.hypot(x - mission.start[0], y - mission.start[1])
+    report.problems += _problems(report)
+    return report
+
+
+def _problems(report: MissionReport) -> List[str]:
+    problems: List[str] = []
+    mission = report.mission
+    if not report.finished:
+        problems.append(f"The mission node never announced '{DONE}' on its state topic.")
+    expected = [(state.name, state.color) for state in mission.states]
+    seen = [(run.name, run.color) for run in report.states]
+    if seen != expected:
+        for index, wanted in enumerate(expected):
+            got = seen[index] if index < len(seen) else None
+            if got != wanted:
+                shown = "nothing" if got is None else f"{got[0]} in {got[1]}"
+                problems.append(
+                    f"State {index + 1} should be {wanted[0]} in {wanted[1]}, but the bag "
+                    f"shows {shown}."
+                )
+                break
+        if len(seen) > len(expected):
+            problems.append(f"The bag shows {len(seen)} states; the mission has {len(expected)}.")
+    else:
+        for state, run in zip(mission.states, report.states):
+            if state.is_stop:
+                problem = _stop_problem(state, run)
+                if problem:
+                    problems.append(problem)
+    if report.distance_to_start is None:
+        problems.append("The bag has no ground truth, so the end cannot be checked.")
+    elif not report.closed:
+        problems.append(
+            f"The robot ended {100 * report.distance_to_start:.1f} cm from the start; "
+            f"it should end within {100 * CLOSURE_TOLERANCE_M:.0f} cm."
+        )
+    if report.final_pose_odometry is None:
+        problems.append("The bag has no odometry pose (odometry_node/pose).")
+    return problems

@@ -1,0 +1,375 @@
+"""Run a mission on the virtual Duckiebot with a solution: the course's main job.
+
+:func:`run_mission` starts the virtual Duckiebot, launches three nodes written with rospy
+(the library's odometry node running the solution's odometry functions, and the solution's own
+light service node and mission node), records a ROS 1 bag, and when the mission is over writes
+what happened to a folder::
+
+    mission.bag       poses (odometry and truth), encoder ticks, commands, LEDs, states
+    trajectory.png    the path on the mat and x, y, theta over time, odometry against truth
+    mission.gif       the same path, animated
+    summary.json      the states with their LED colours and times, the final poses, the
+                      distance to the start, the real-time factor (see :mod:`duckielib.behaviour`)
+    log.txt           every node's log
+
+``duckie mission`` and ``make run`` call it with the reference solution (the export of
+``solutions/``) unless given a student's. A solution that is missing a part or fails gives the
+contract's one-sentence error naming the notebook to finish.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
+
+from duckielib.behaviour import DONE, MissionReport, mission_report
+from duckielib.errors import DuckielibError
+from duckielib.missions import Mission, mission_named
+from duckielib.solution import (
+    CONTRACT,
+    MISSION_PARTS,
+    SolutionError,
+    check_part,
+    load_solution,
+)
+
+__all__ = ["MissionError", "MissionRun", "OUTPUTS", "RECORDED", "run_mission"]
+
+#: The files a run writes in its folder.
+OUTPUTS = ("mission.bag", "trajectory.png", "mission.gif", "summary.json", "log.txt")
+
+#: The topics recorded, relative to the robot's namespace.
+RECORDED = (
+    "odometry_node/pose",
+    "simulator_node/ground_truth_pose",
+    "left_wheel_encoder_node/tick",
+    "right_wheel_encoder_node/tick",
+    "car_cmd_switch_node/cmd",
+    "wheels_driver_node/wheels_cmd_executed",
+    "led_emitter_node/led_pattern",
+    "mission_node/state",
+)
+
+#: Simulated seconds a mission may take before it is stopped.
+DEFAULT_TIME_LIMIT_S = 600.0
+
+#: The student's nodes, whose errors stop the run with their message.
+_STUDENT_NODES = ("odometry_node", "light_service_node", "mission_node")
+
+
+class MissionError(DuckielibError):
+    """The mission could not run to its end (the message says why and what to do)."""
+
+
+@dataclass
+class MissionRun:
+    """A finished run.
+
+    Attributes:
+        report: what the robot did, from the bag (:class:`~duckielib.behaviour.MissionReport`).
+        summary: the content of ``summary.json``.
+        folder: where the files are.
+        files: the files written, by name (``"bag"``, ``"trajectory"``, ...).
+        simulated_s: simulated seconds run.
+        wall_s: wall-clock seconds the simulation took (graph, nodes, odometry, bag).
+    """
+
+    report: MissionReport
+    summary: Dict[str, Any]
+    folder: Path
+    files: Dict[str, Path]
+    simulated_s: float
+    wall_s: float
+
+    @property
+    def realtime_factor(self) -> float:
+        """Simulated seconds per wall-clock second."""
+        return self.simulated_s / self.wall_s if self.wall_s > 0 else math.inf
+
+    def text(self) -> str:
+        """A short summary for people."""
+        report = self.report
+        lines = [
+            f"{report.mission.name} on the {self.summary['noise']} robot "
+            f"(seed {self.summary['seed']}), {self.summary['solution']} solution:"
+        ]
+        for run in report.states:
+            lines.append(f"  {run.name:<8} {run.color:<7} {run.start:6.1f} s to {run.end:6.1f} s")
+        lines.append(
+            f"total time {report.total_time:.1f} s (simulated), run in {self.wall_s:.2f} s: "
+            f"{self.realtime_factor:.0f}x real time"
+        )
+        for label, pose in (
+            ("final pose by odometry", report.final_pose_odometry),
+            ("true final pose       ", report.final_pose_truth),
+        ):
+            if pose is not None:
+                x, y, theta = pose
+                lines.append(
+                    f"{label}: x = {x:.3f} m, y = {y:.3f} m, theta = {theta:.3f} rad "
+                    f"({math.degrees(theta):.1f} deg)"
+                )
+        error = report.odometry_error
+        if error is not None and report.distance_to_start is not None:
+            lines.append(
+                f"odometry is {100 * error[0]:.1f} cm and {math.degrees(error[1]):.1f} deg from "
+                f"the truth; the robot ended {100 * report.distance_to_start:.1f} cm from the start"
+            )
+        lines += [f"problem: {problem}" for problem in report.problems]
+        if not report.problems:
+            lines.append("every check passed: states and colours in order, stops held, back home")
+        written = ", ".join(path.name for path in self.files.values())
+        lines.append(f"wrote {written} in {self.folder}")
+        return "\n".join(lines)
+
+
+def _solution(solution: Any) -> Any:
+    """The solution as something with the parts as attributes or keys, checked."""
+    if solution is None or isinstance(solution, (str, os.PathLike)):
+        return load_solution(solution, required=MISSION_PARTS)
+    for name in MISSION_PARTS:
+        check_part(solution, name)
+    return solution
+
+
+def _part(solution: Any, name: str) -> Any:
+    return solution[name] if isinstance(solution, Mapping) else getattr(solution, name)
+
+
+def _unwritten_part(error: BaseException) -> Optional[str]:
+    """The contract part whose unfinished body raised ``error`` (a NotImplementedError)."""
+    for frame, _ in reversed(list(traceback.walk_tb(error.__traceback__))):
+        name = frame.f_code.co_name
+        if name in CONTRACT:
+            return name
+        owner = type(frame.f_locals.get("self")).__name__
+        if owner in CONTRACT:
+            return owner
+    return None
+
+
+def _crash_message(node: str, error: BaseException) -> str:
+    if isinstance(error, SolutionError):
+        return str(error)
+    if isinstance(error, NotImplementedError):
+        name = _unwritten_part(error)
+        if name is not None:
+            part = CONTRACT[name]
+            return (
+                f"Finish notebook {part.notebook}: {part.name} is not written yet "
+                f"(the {node} needs it)."
+            )
+        return f"The {node} called a function that is not written yet (NotImplementedError)."
+    last = traceback.extract_tb(error.__traceback__)[-1:] or None
+    where = f" (line {last[0].lineno} of {last[0].name})" if last else ""
+    return f"The {node} stopped with {type(error).__name__}: {error}{where}."
+
+
+def _clear(folder: Path) -> None:
+    for name in OUTPUTS:
+        for path in (folder / name, folder / (name + ".active")):
+            if path.exists():
+                path.unlink()
+
+
+def run_mission(
+    solution: Any = None,
+    mission: Union[str, Mission] = "square_then_circle",
+    noise: str = "ideal",
+    seed: int = 0,
+    out: Union[str, os.PathLike] = "runs/latest",
+    stop_color: Optional[str] = None,
+    animation: bool = True,
+    time_limit: float = DEFAULT_TIME_LIMIT_S,
+    echo: Optional[Callable[[str], None]] = None,
+) -> MissionRun:
+    """Run ``mission`` on the virtual Duckiebot with ``solution`` and write its files to ``out``.
+
+    Args:
+        solution: the solution: None for the reference (the export of ``solutions/``), a
+            folder of notebooks or a ``.py`` made by ``duckie export``, a loaded module, or a
+            notebook's ``globals()``.
+        mission: a :class:`~duckielib.missions.Mission` or its name (``"square_then_circle"``,
+            ``"d_shape"``).
+        noise: the simulator's noise profile, ``"ideal"`` or ``"realistic"``.
+        seed: the simulator's seed (same seed and solution, same run).
+        out: the folder to write the files to (created if needed; earlier files replaced).
+        stop_color: the LED pattern of the stop states, if not the mission's (``"RED"``).
+        animation: whether to write ``mission.gif`` (it takes a few seconds).
+        time_limit: simulated seconds after which an unfinished mission is stopped.
+        echo: called with each log line of the nodes as it happens (None: kept in log.txt).
+
+    Returns:
+        The run: its report, summary and files.
+
+    Raises:
+        SolutionError: if the solution lacks a part or a part fails (naming the notebook).
+        MissionError: if the mission cannot run to its end.
+        ConfigError: if the mission, noise profile or colour is unknown.
+    """
+    from duckielib.ros import install_modules
+
+    install_modules()  # the solution's nodes import rospy: the in-process graph's
+    chosen = mission_named(mission) if isinstance(mission, str) else mission
+    if stop_color is not None:
+        chosen = chosen.with_stop_color(stop_color)
+    label = "the reference" if solution is None else "your"
+    parts = _solution(solution)
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    _clear(folder)
+    files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
+    namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit, echo)
+
+    report = mission_report(files["bag"], chosen, namespace)
+    summary: Dict[str, Any] = report.as_dict()
+    summary.update(
+        {
+            "noise": noise,
+            "seed": seed,
+            "solution": label.replace("the ", ""),
+            "simulated_s": round(simulated, 3),
+            "wall_s": round(wall, 3),
+            "realtime_factor": round(simulated / wall, 1) if wall > 0 else None,
+        }
+    )
+    files["trajectory"] = _trajectory_figure(files["bag"], report, folder / "trajectory.png")
+    if animation:
+        files["animation"] = _animation(files["bag"], folder / "mission.gif")
+    files["summary"] = folder / "summary.json"
+    partial = folder / "summary.json.partial"
+    partial.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    partial.replace(files["summary"])
+    return MissionRun(report, summary, folder, files, simulated, wall)
+
+
+def _drive(
+    parts: Any,
+    chosen: Mission,
+    noise: str,
+    seed: int,
+    files: Dict[str, Path],
+    time_limit: float,
+    echo: Optional[Callable[[str], None]],
+) -> Tuple[str, float, float]:
+    """Run the mission's nodes on a new virtual Duckiebot, recording the bag and the log.
+
+    Returns:
+        The robot's namespace, the simulated seconds and the wall-clock seconds.
+    """
+    import rospy  # the in-process graph's, served by install_modules
+
+    from duckielib.bags import BagRecorder
+    from duckielib.nodes import odometry_node
+    from duckielib.ros.graph import ERROR, Graph, NodeCrashed
+    from duckielib.sim import VirtualDuckiebot
+
+    graph = Graph(echo_logs=False)
+    bot = VirtualDuckiebot(seed=seed, noise=noise, graph=graph, start_pose=chosen.start)
+    finished: List[bool] = []
+
+    def mission_main() -> None:
+        try:
+            _part(parts, "mission_node")(chosen)
+        finally:
+            finished.append(True)
+
+    bot.launch(odometry_node, rospy, parts, chosen.start)
+    bot.launch(_part(parts, "light_service_node"))
+    bot.launch(mission_main)
+    topics = [bot.namespace + name for name in RECORDED]
+    recorder = BagRecorder(files["bag"], topics, graph=graph)
+    crash: Optional[str] = None
+    wall = time.perf_counter()
+    try:
+        ended = bot.run_until(lambda: bool(finished), time_limit)
+        bot.run(0.2)  # let the last messages arrive
+        errors = [
+            record
+            for record in graph.log
+            if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
+        ]
+        if errors and not ended:
+            crash = f"The {errors[0].node} logged an error: {errors[0].text.splitlines()[-1]}"
+    except NodeCrashed as error:
+        node = str(error).split()[1].rsplit("/", 1)[-1]
+        cause = error.__cause__ or error
+        crash = _crash_message(node.replace("_", " "), cause)
+        ended = False
+    finally:
+        bot.shutdown()
+        recorder.close()
+        wall = time.perf_counter() - wall
+        simulated = bot.time
+        log = "\n".join(repr(record) for record in graph.log) + "\n"
+        files["log"].write_text(log, encoding="utf-8")
+    if echo is not None:
+        for record in graph.log:
+            echo(repr(record))
+    if crash is not None:
+        raise (SolutionError if crash.startswith("Finish notebook") else MissionError)(
+            f"{crash} The run's log is in {files['log']}."
+        )
+    if not ended:
+        last = [record.text for record in graph.log if "state" in record.text][-1:]
+        raise MissionError(
+            f"The mission did not announce '{DONE}' within {time_limit:.0f} simulated seconds"
+            + (f" (last log: {last[0]})" if last else "")
+            + f"; the run's bag and log are in {files['log'].parent}."
+        )
+    return bot.namespace, simulated, wall
+
+
+def _named_tracks(bag: Path) -> List[Any]:
+    from duckielib.bags import pose_tracks
+
+    tracks = []
+    for track in pose_tracks(bag, "record"):
+        if track.label.endswith("odometry_node/pose"):
+            track.label = "odometry"
+        elif track.label.endswith("ground_truth_pose"):
+            track.label = "truth"
+        else:
+            continue
+        tracks.append(track)
+    return sorted(tracks, key=lambda track: track.label)
+
+
+def _trajectory_figure(bag: Path, report: MissionReport, path: Path) -> Path:
+    from duckielib import plots
+
+    tracks = _named_tracks(bag)
+    start = min(float(track.t[0]) for track in tracks)
+    for track in tracks:
+        track.t = track.t - start
+    figure = plots.pose_figure(
+        tracks,
+        title=f"{report.mission.name}: odometry and truth",
+        reference=report.mission.start,
+    )
+    return plots.save_figure(figure, path)
+
+
+def _animation(bag: Path, path: Path) -> Path:
+    from matplotlib.animation import PillowWriter
+
+    from duckielib import plots
+
+    tracks = _named_tracks(bag)
+    start = min(float(track.t[0]) for track in tracks)
+    for track in tracks:
+        track.t = track.t - start
+    duration = max(float(track.t[-1]) for track in tracks)
+    fps = 10.0
+    speed = max(1.0, duration / 12.0)  # about 12 s of animation
+    animation = plots.animate_path(tracks, fps=fps, speed=speed)
+    partial = path.with_name(path.stem + ".partial.gif")
+    animation.save(str(partial), writer=PillowWriter(fps=fps), dpi=60)
+    partial.replace(path)
+    return path
