@@ -45,6 +45,7 @@ IGNORED = [
     "*.pyc",
     "__pycache__",
     "feedback",
+    "runs",
     "*.bag",
     "*.active",
     "*.png",

@@ -228,6 +228,7 @@ def mission_report(
     mission: Mission,
     namespace: str = "/duckiebot/",
     state_topic: Optional[str] = None,
+    tracks: Optional[Sequence[PoseTrack]] = None,
 ) -> MissionReport:
     """Read a mission's bag and say what the robot did compared with ``mission``.
 
@@ -238,6 +239,8 @@ def mission_report(
         mission: the mission that was asked for.
         namespace: the robot's namespace, ``/VEH/``.
         state_topic: where the states were announced (default ``/VEH/mission_node/state``).
+        tracks: the bag's pose tracks with record times, if already read
+            (``pose_tracks(bag, "record")``).
 
     Returns:
         The report; its ``problems`` say, one sentence each, what differs from the mission.
@@ -264,7 +267,7 @@ def mission_report(
         if led_topic in topics
         else []
     )
-    tracks = pose_tracks(bag, "record")
+    tracks = pose_tracks(bag, "record") if tracks is None else tracks
     truth = _track(tracks, "ground_truth_pose")
     odometry = _track(tracks, "odometry_node/pose")
 

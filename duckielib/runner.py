@@ -19,6 +19,7 @@ contract's one-sentence error naming the notebook to finish.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -227,7 +228,10 @@ def run_mission(
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
     namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit, echo)
 
-    report = mission_report(files["bag"], chosen, namespace)
+    from duckielib.bags import pose_tracks
+
+    tracks = pose_tracks(files["bag"], "record")
+    report = mission_report(files["bag"], chosen, namespace, tracks=tracks)
     summary: Dict[str, Any] = report.as_dict()
     summary.update(
         {
@@ -239,9 +243,10 @@ def run_mission(
             "realtime_factor": round(simulated / wall, 1) if wall > 0 else None,
         }
     )
-    files["trajectory"] = _trajectory_figure(files["bag"], report, folder / "trajectory.png")
+    tracks = _named_tracks(tracks)
+    files["trajectory"] = _trajectory_figure(tracks, report, folder / "trajectory.png")
     if animation:
-        files["animation"] = _animation(files["bag"], folder / "mission.gif")
+        files["animation"] = _animation(tracks, folder / "mission.gif")
     files["summary"] = folder / "summary.json"
     partial = folder / "summary.json.partial"
     partial.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
@@ -326,28 +331,28 @@ def _drive(
     return bot.namespace, simulated, wall
 
 
-def _named_tracks(bag: Path) -> List[Any]:
-    from duckielib.bags import pose_tracks
-
-    tracks = []
-    for track in pose_tracks(bag, "record"):
+def _named_tracks(tracks: List[Any]) -> List[Any]:
+    """The odometry and truth tracks, labelled for people, times from the first pose."""
+    named = []
+    for track in tracks:
         if track.label.endswith("odometry_node/pose"):
-            track.label = "odometry"
+            label = "odometry"
         elif track.label.endswith("ground_truth_pose"):
-            track.label = "truth"
+            label = "truth"
         else:
             continue
-        tracks.append(track)
-    return sorted(tracks, key=lambda track: track.label)
+        named.append(dataclasses.replace(track, label=label))
+    start = min(float(track.t[0]) for track in named)
+    return [dataclasses.replace(track, t=track.t - start) for track in sorted(named, key=_label)]
 
 
-def _trajectory_figure(bag: Path, report: MissionReport, path: Path) -> Path:
+def _label(track: Any) -> str:
+    return track.label
+
+
+def _trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> Path:
     from duckielib import plots
 
-    tracks = _named_tracks(bag)
-    start = min(float(track.t[0]) for track in tracks)
-    for track in tracks:
-        track.t = track.t - start
     figure = plots.pose_figure(
         tracks,
         title=f"{report.mission.name}: odometry and truth",
@@ -356,18 +361,14 @@ def _trajectory_figure(bag: Path, report: MissionReport, path: Path) -> Path:
     return plots.save_figure(figure, path)
 
 
-def _animation(bag: Path, path: Path) -> Path:
+def _animation(tracks: List[Any], path: Path) -> Path:
     from matplotlib.animation import PillowWriter
 
     from duckielib import plots
 
-    tracks = _named_tracks(bag)
-    start = min(float(track.t[0]) for track in tracks)
-    for track in tracks:
-        track.t = track.t - start
     duration = max(float(track.t[-1]) for track in tracks)
-    fps = 10.0
-    speed = max(1.0, duration / 12.0)  # about 12 s of animation
+    fps = 8.0
+    speed = max(1.0, duration / 10.0)  # about 10 s of animation, 80 frames
     animation = plots.animate_path(tracks, fps=fps, speed=speed)
     partial = path.with_name(path.stem + ".partial.gif")
     animation.save(str(partial), writer=PillowWriter(fps=fps), dpi=60)

@@ -29,6 +29,10 @@ BENCHMARKS: Dict[str, Tuple[str, str]] = {
         "duckielib.bench.sim",
         "real-time factor of the simulator alone (60 s drive, encoders and LEDs on)",
     ),
+    "mission": (
+        "duckielib.bench.mission",
+        "real-time factor of the whole square-then-circle mission (nodes, odometry, bag)",
+    ),
     "bags": (
         "duckielib.bench.bags",
         "odometry replayed from a 100,000-message encoder bag, and Debian's rosbag reading it",

@@ -1,7 +1,9 @@
 """Every deliberately wrong solution fails the test cell of its function, hidden tests included.
 
-Fast and in-process: a notebook's import cell, then its graded and test cells in order (the
-reference code, with one cell replaced by a wrong one), as nbgrader runs them. The real
+Fast and in-process: a notebook's import cell, the cells that load the student's earlier work
+(``load_solution("..")``, run from the notebook's folder, so they load the reference), then
+its graded and test cells in order (the reference code, with one cell replaced by a wrong one),
+as nbgrader runs them. The real
 nbgrader run of the first mistake of each cell is in ``test_course_autograde.py``.
 """
 
@@ -10,9 +12,10 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+from pathlib import Path
 
 import pytest
-from coursetools import NAMES, load_solution_nb, nbgrader, source, wrong_solutions
+from coursetools import NAMES, SOLUTIONS, load_solution_nb, nbgrader, source, wrong_solutions
 
 from duckielib.ros import uninstall_modules
 
@@ -26,12 +29,16 @@ def failing_checks(name, replacements=None):
     namespace: dict = {"__name__": "__main__"}
     failing = []
     environment = dict(os.environ)
+    folder = Path.cwd()
     try:
+        os.chdir(SOLUTIONS / name)
         with contextlib.redirect_stdout(io.StringIO()):
             exec(compile(source(cells[0]), f"{name}[imports]", "exec"), namespace)
             for cell in cells[1:]:
                 meta = nbgrader(cell)
                 if not meta:
+                    if "load_solution(" in source(cell):
+                        exec(compile(source(cell), f"{name}[earlier work]", "exec"), namespace)
                     continue
                 text = replacements.get(meta["grade_id"], source(cell))
                 try:
@@ -39,6 +46,7 @@ def failing_checks(name, replacements=None):
                 except Exception:
                     failing.append(meta["grade_id"])
     finally:
+        os.chdir(folder)
         # A notebook may alias rospy and the message packages, or set VEHICLE_NAME: undo both
         # so the tests that follow see the real modules and environment.
         uninstall_modules()

@@ -1,0 +1,192 @@
+"""The main job: a mission on the virtual Duckiebot with a solution, its bag and its report."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from duckielib.bags import Bag
+from duckielib.behaviour import mission_report
+from duckielib.errors import ConfigError
+from duckielib.missions import D_SHAPE, SQUARE_THEN_CIRCLE
+from duckielib.runner import RECORDED, MissionError, run_mission
+from duckielib.solution import MISSION_PARTS, SolutionError, load_solution
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return load_solution(required=MISSION_PARTS)
+
+
+@pytest.fixture(scope="module")
+def square(reference, tmp_path_factory):
+    return run_mission(reference, out=tmp_path_factory.mktemp("square"), animation=False)
+
+
+def test_the_reference_drives_the_square_then_circle_as_asked(square):
+    report = square.report
+    assert [(run.name, run.color) for run in report.states] == [
+        (state.name, state.color) for state in SQUARE_THEN_CIRCLE.states
+    ]
+    assert report.finished and report.states_in_order and report.stops_held
+    for run in report.states:
+        if run.name == "wait":
+            assert run.duration == pytest.approx(5.0, abs=0.2)
+            assert run.moved < 0.005
+    square_leg = report.states[1]
+    assert square_leg.moved > 1.7  # the far corner is 1.25 * sqrt(2) m away
+    assert report.problems == []
+
+
+def test_on_the_ideal_robot_odometry_and_truth_agree_and_the_robot_comes_home(square):
+    distance, heading = square.report.odometry_error
+    assert distance < 0.05
+    assert math.degrees(heading) < 5.0
+    assert square.report.distance_to_start < 0.10
+    assert square.report.closed
+
+
+def test_summary_json_holds_the_figures_the_issue_names(square):
+    summary = json.loads(square.files["summary"].read_text())
+    for key in (
+        "states",
+        "total_time",
+        "final_pose_odometry",
+        "final_pose_truth",
+        "distance_to_start",
+        "realtime_factor",
+    ):
+        assert key in summary, key
+    assert [state["name"] for state in summary["states"]] == [
+        state.name for state in SQUARE_THEN_CIRCLE.states
+    ]
+    assert all({"name", "color", "start", "end"} <= set(state) for state in summary["states"])
+    assert summary["states"][0]["start"] == 0.0
+    assert summary["total_time"] == pytest.approx(summary["states"][-1]["end"])
+    assert len(summary["final_pose_truth"]) == 3 and len(summary["final_pose_odometry"]) == 3
+    assert summary["realtime_factor"] > 1
+    assert summary["noise"] == "ideal" and summary["solution"] == "your"
+
+
+def test_the_bag_holds_every_recorded_topic_and_reads_back_to_the_same_report(square):
+    bag = Bag(square.files["bag"])
+    for name in RECORDED:
+        assert bag.topic("/duckiebot/" + name).count > 0, name
+    again = mission_report(bag, SQUARE_THEN_CIRCLE)
+    assert again.as_dict() == square.report.as_dict()
+    assert square.files["trajectory"].stat().st_size > 10_000
+    assert "mission_node" in square.files["log"].read_text()
+
+
+def test_a_run_is_deterministic_for_a_seed(reference, square, tmp_path):
+    again = run_mission(reference, out=tmp_path, animation=False)
+    assert again.report.as_dict() == square.report.as_dict()
+
+
+def test_the_d_variant_is_the_same_node_with_other_data(reference, tmp_path):
+    run = run_mission(reference, mission="d_shape", out=tmp_path, animation=False)
+    assert run.report.states_in_order and run.report.stops_held
+    assert run.report.states[1].name == "d"
+    assert [run.name for run in run.report.states] == [state.name for state in D_SHAPE.states]
+    assert run.report.closed, run.report.problems
+
+
+def test_the_realistic_robot_reports_its_figures(reference, tmp_path):
+    run = run_mission(
+        reference, noise="realistic", seed=3, stop_color="WHITE", out=tmp_path, animation=True
+    )
+    assert [run.color for run in run.report.states if run.name == "wait"] == ["WHITE"] * 3
+    assert run.summary["noise"] == "realistic"
+    assert run.summary["odometry_error"]["distance"] >= 0
+    assert run.files["animation"].read_bytes()[:6] == b"GIF89a"
+    assert "realistic robot (seed 3)" in run.text()
+
+
+def test_an_unwritten_part_names_the_notebook_to_finish(reference, tmp_path):
+    class PID:
+        def __init__(self, kp, ki, kd, limit):
+            pass
+
+        def update(self, error, dt):
+            raise NotImplementedError()
+
+        def reset(self):
+            pass
+
+    parts = {**vars(reference), "PID": PID}
+    with pytest.raises(SolutionError, match=r"^Finish notebook 07_control: PID is not written"):
+        run_mission(parts, out=tmp_path, animation=False)
+    assert not (tmp_path / "summary.json").exists()
+    assert Bag(tmp_path / "mission.bag").message_count > 0  # closed and readable
+
+
+def test_a_mission_that_never_ends_is_stopped_with_a_sentence(reference, tmp_path):
+    def mission_node(mission):
+        import rospy
+
+        rospy.init_node("mission_node")
+        rospy.spin()
+
+    parts = {**vars(reference), "mission_node": mission_node}
+    with pytest.raises(MissionError, match="did not announce 'done' within 30 simulated"):
+        run_mission(parts, out=tmp_path, animation=False, time_limit=30)
+
+
+def test_wrong_colours_are_reported_as_problems(reference, tmp_path):
+    def light_service_node():
+        import rospy
+        from duckietown_msgs.srv import ChangePattern, ChangePatternResponse
+
+        rospy.init_node("light_service_node")
+        rospy.Service("~set_color", ChangePattern, lambda request: ChangePatternResponse())
+        rospy.spin()
+
+    parts = {**vars(reference), "light_service_node": light_service_node}
+    run = run_mission(parts, out=tmp_path, animation=False)
+    assert not run.report.states_in_order
+    assert run.report.problems[0] == (
+        "State 1 should be wait in RED, but the bag shows wait in WHITE."
+    )
+
+
+def test_unknown_choices_are_refused_before_anything_runs(reference, tmp_path):
+    with pytest.raises(ConfigError, match="no mission 'circle'"):
+        run_mission(reference, mission="circle", out=tmp_path)
+    with pytest.raises(ConfigError, match="not an LED pattern"):
+        run_mission(reference, stop_color="PINK", out=tmp_path)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_command_line_runs_the_mission_and_refuses_an_unfinished_course(tmp_path):
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run(
+        [sys.executable, "-m", "duckielib.cli", "mission", "--out", str(tmp_path / "run")],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=root,
+    )
+    assert done.returncode == 0, done.stderr
+    assert "every check passed" in done.stdout
+    assert {path.name for path in (tmp_path / "run").iterdir()} >= {
+        "mission.bag",
+        "trajectory.png",
+        "mission.gif",
+        "summary.json",
+        "log.txt",
+    }
+    refused = subprocess.run(
+        [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "course", "--out", "x"],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=root,
+    )
+    assert refused.returncode == 1
+    assert refused.stderr.startswith("duckie: Finish notebook 05_odometry: write ")
+    assert "Traceback" not in refused.stderr
