@@ -233,6 +233,8 @@ class Export:
             ``NotImplementedError``).
         problems: sentences about parts whose parameters differ from the contract.
         notebooks: the notebooks read, relative to the exported folder.
+        broken: sentences about exported cells that are not valid Python (left out), by
+            notebook.
     """
 
     source: str
@@ -241,6 +243,7 @@ class Export:
     unfinished: List[str] = field(default_factory=list)
     problems: List[str] = field(default_factory=list)
     notebooks: List[str] = field(default_factory=list)
+    broken: Dict[str, str] = field(default_factory=dict)
 
     @property
     def complete(self) -> bool:
@@ -379,7 +382,7 @@ def _label(path: Path, folder: Path) -> str:
     return path.relative_to(folder).as_posix()
 
 
-def export_solution(folder: Union[str, Path]) -> Export:
+def export_solution(folder: Union[str, Path], strict: bool = True) -> Export:
     """Collect the cells tagged ``export`` of a folder's notebooks into one solution module.
 
     Notebooks are read in path order (``01_...`` first), so a later notebook can use what an
@@ -389,6 +392,9 @@ def export_solution(folder: Union[str, Path]) -> Export:
     Args:
         folder: a folder of notebooks, at any depth: a student's ``course/``, one assignment
             folder, or the instructors' ``solutions/``.
+        strict: whether an exported cell that is not valid Python stops the export; if not,
+            the cell is left out and named in ``broken`` (a half-typed cell in a later
+            notebook then does not keep an earlier notebook from loading its parts).
 
     Returns:
         The module's text and what is missing, unfinished or malformed, by notebook.
@@ -414,10 +420,14 @@ def export_solution(folder: Union[str, Path]) -> Export:
             try:
                 tree = ast.parse(cell)
             except SyntaxError as error:
-                raise SolutionError(
+                sentence = (
                     f"In notebook {label}, exported cell {index} is not valid Python "
                     f"(line {error.lineno}: {error.msg}); fix it and export again."
-                ) from None
+                )
+                if strict:
+                    raise SolutionError(sentence) from None
+                export.broken.setdefault(path.stem, sentence)
+                continue
             lines = cell.splitlines()
             kept = []
             for node in tree.body:
@@ -508,7 +518,11 @@ def load_solution(
     """
     folder = reference_solution_dir() if path is None else Path(path)
     if folder.is_dir():
-        export = export_solution(folder)
+        export = export_solution(folder, strict=False)
+        for name in required:
+            notebook = CONTRACT[name].notebook
+            if name not in export.found and notebook in export.broken:
+                raise SolutionError(export.broken[notebook])
         unfinished = [name for name in required if name in export.unfinished]
         if unfinished:
             first = CONTRACT[unfinished[0]]

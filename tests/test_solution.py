@@ -243,3 +243,17 @@ def test_the_library_defines_no_graded_part():
         module = importlib.import_module(module_info.name)
         offenders += [f"{module_info.name}.{name}" for name in CONTRACT if hasattr(module, name)]
     assert offenders == [], "students receive duckielib: it must not hold their answers"
+
+
+def test_a_broken_later_notebook_does_not_keep_earlier_parts_from_loading(tmp_path):
+    folder = odometry_course(tmp_path / "course")
+    write_notebook(
+        folder / "09_mission" / "09_mission.ipynb",
+        [code("def mission_node(mission):\n    while True\n")],
+    )
+    with pytest.raises(SolutionError, match=r"In notebook 09_mission/09_mission.ipynb, exported"):
+        export_solution(folder)
+    module = load_solution(folder)  # the odometry parts of 05 still load
+    assert module.delta_phi(135, 0, 135)[0] == pytest.approx(2 * math.pi)
+    with pytest.raises(SolutionError, match="exported cell 1 is not valid Python"):
+        load_solution(folder, required=["mission_node"])

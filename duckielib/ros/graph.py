@@ -253,9 +253,10 @@ class Graph:
         if self._crash is not None:
             name, error = self._crash
             self._crash = None
+            where = "in the log above" if self.echo_logs else "in graph.log"
             raise NodeCrashed(
                 f"Node {name} stopped with {type(error).__name__}: {error} "
-                "(its traceback is in the log above)."
+                f"(its traceback is {where})."
             ) from error
 
     # -- actors -----------------------------------------------------------------------------
