@@ -283,8 +283,10 @@ def mission_report(
     end_time = done[0] if done else bag_end
     for index, (start, name) in enumerate(states):
         end = states[index + 1][0] if index + 1 < len(states) else end_time
-        middle = (start + end) / 2
-        shown = [color for t, color in leds if t <= middle]
+        # The colour shown once the state has begun: half a second in (or half-way through
+        # a shorter state), so the order of the LED call and the announcement does not matter.
+        seen_at = min(start + 0.5, (start + end) / 2)
+        shown = [color for t, color in leds if t <= seen_at]
         report.states.append(
             StateRun(
                 name=name,

@@ -235,6 +235,7 @@ def run_mission(
     summary: Dict[str, Any] = report.as_dict()
     summary.update(
         {
+            "robot": namespace.strip("/"),
             "noise": noise,
             "seed": seed,
             "solution": label.replace("the ", ""),
@@ -287,7 +288,7 @@ def _drive(
 
     bot.launch(odometry_node, rospy, parts, chosen.start)
     bot.launch(_part(parts, "light_service_node"))
-    bot.launch(mission_main)
+    bot.launch(mission_main, name="mission_node")
     topics = [bot.namespace + name for name in RECORDED]
     recorder = BagRecorder(files["bag"], topics, graph=graph)
     crash: Optional[str] = None

@@ -47,11 +47,10 @@ def test_unknown_benchmark_is_one_sentence_without_traceback():
     assert "Traceback" not in result.stderr
 
 
-def test_mission_says_what_is_not_built_yet():
-    result = duckie("mission")
-    assert result.returncode == 1
-    assert result.stderr.startswith("duckie: The mission runner")
-    assert "Traceback" not in result.stderr
+def test_mission_refuses_an_unknown_mission_with_usage():
+    result = duckie("mission", "--mission", "circle")
+    assert result.returncode == 2
+    assert "invalid choice: 'circle'" in result.stderr
 
 
 def test_bad_command_line_exits_2_with_usage():

@@ -15,7 +15,13 @@ from duckielib.behaviour import mission_report
 from duckielib.errors import ConfigError
 from duckielib.missions import D_SHAPE, SQUARE_THEN_CIRCLE
 from duckielib.runner import RECORDED, MissionError, run_mission
-from duckielib.solution import MISSION_PARTS, SolutionError, load_solution
+from duckielib.solution import (
+    MISSION_PARTS,
+    SolutionError,
+    export_solution,
+    load_solution,
+    reference_solution_dir,
+)
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +39,9 @@ def test_the_reference_drives_the_square_then_circle_as_asked(square):
     assert [(run.name, run.color) for run in report.states] == [
         (state.name, state.color) for state in SQUARE_THEN_CIRCLE.states
     ]
-    assert report.finished and report.states_in_order and report.stops_held
+    assert report.finished
+    assert report.states_in_order
+    assert report.stops_held
     for run in report.states:
         if run.name == "wait":
             assert run.duration == pytest.approx(5.0, abs=0.2)
@@ -68,9 +76,11 @@ def test_summary_json_holds_the_figures_the_issue_names(square):
     assert all({"name", "color", "start", "end"} <= set(state) for state in summary["states"])
     assert summary["states"][0]["start"] == 0.0
     assert summary["total_time"] == pytest.approx(summary["states"][-1]["end"])
-    assert len(summary["final_pose_truth"]) == 3 and len(summary["final_pose_odometry"]) == 3
+    assert len(summary["final_pose_truth"]) == 3
+    assert len(summary["final_pose_odometry"]) == 3
     assert summary["realtime_factor"] > 1
-    assert summary["noise"] == "ideal" and summary["solution"] == "your"
+    assert summary["noise"] == "ideal"
+    assert summary["solution"] == "your"
 
 
 def test_the_bag_holds_every_recorded_topic_and_reads_back_to_the_same_report(square):
@@ -90,7 +100,8 @@ def test_a_run_is_deterministic_for_a_seed(reference, square, tmp_path):
 
 def test_the_d_variant_is_the_same_node_with_other_data(reference, tmp_path):
     run = run_mission(reference, mission="d_shape", out=tmp_path, animation=False)
-    assert run.report.states_in_order and run.report.stops_held
+    assert run.report.states_in_order
+    assert run.report.stops_held
     assert run.report.states[1].name == "d"
     assert [run.name for run in run.report.states] == [state.name for state in D_SHAPE.states]
     assert run.report.closed, run.report.problems
@@ -107,22 +118,26 @@ def test_the_realistic_robot_reports_its_figures(reference, tmp_path):
     assert "realistic robot (seed 3)" in run.text()
 
 
-def test_an_unwritten_part_names_the_notebook_to_finish(reference, tmp_path):
-    class PID:
-        def __init__(self, kp, ki, kd, limit):
-            pass
+def test_an_unwritten_part_names_the_notebook_to_finish(tmp_path):
+    unwritten_pid = """
 
-        def update(self, error, dt):
-            raise NotImplementedError()
+class PID:
+    def __init__(self, kp, ki, kd, limit):
+        pass
 
-        def reset(self):
-            pass
+    def update(self, error, dt):
+        raise NotImplementedError()
 
-    parts = {**vars(reference), "PID": PID}
+    def reset(self):
+        pass
+"""
+    module = tmp_path / "mine.py"
+    module.write_text(export_solution(reference_solution_dir()).source + unwritten_pid)
+    out = tmp_path / "run"
     with pytest.raises(SolutionError, match=r"^Finish notebook 07_control: PID is not written"):
-        run_mission(parts, out=tmp_path, animation=False)
-    assert not (tmp_path / "summary.json").exists()
-    assert Bag(tmp_path / "mission.bag").message_count > 0  # closed and readable
+        run_mission(str(module), out=out, animation=False)
+    assert not (out / "summary.json").exists()
+    assert Bag(out / "mission.bag").message_count > 0  # closed and readable
 
 
 def test_a_mission_that_never_ends_is_stopped_with_a_sentence(reference, tmp_path):
