@@ -60,6 +60,7 @@ __all__ = [
     "plot_pose_over_time",
     "pose_figure",
     "animate_path",
+    "save_animation",
     "save_figure",
 ]
 
@@ -515,4 +516,33 @@ def save_figure(fig: Figure, path: Union[str, Path]) -> Path:
             f"Cannot save the figure as {str(path)!r}: {error.strerror or error}; check that "
             f"you may write there."
         ) from error
+    return path
+
+
+def save_animation(
+    anim: FuncAnimation, path: Union[str, Path], fps: float = 15.0, dpi: float = 72.0
+) -> Path:
+    """Save an animation from :func:`animate_path` as an animated GIF, and return the path.
+
+    The file appears whole or not at all: it is written under another name first.
+
+    Args:
+        anim: the animation.
+        path: the ``.gif`` to write.
+        fps: frames per second of the GIF (give the ``fps`` the animation was made with).
+        dpi: resolution; the animation's figure is 6 x 6 inches.
+
+    Raises:
+        DuckielibError: if ``path`` does not end in ``.gif`` or its folder does not exist.
+    """
+    from matplotlib.animation import PillowWriter
+
+    path = Path(path)
+    if path.suffix.lower() != ".gif":
+        raise DuckielibError(f"{path} must end in .gif: animations are saved as GIFs.")
+    if not path.parent.is_dir():
+        raise DuckielibError(f"There is no folder {path.parent} to write {path.name} into.")
+    partial = path.with_name(path.stem + ".partial.gif")
+    anim.save(str(partial), writer=PillowWriter(fps=fps), dpi=dpi)
+    partial.replace(path)
     return path

@@ -214,19 +214,20 @@ def run_mission(
         MissionError: if the mission cannot run to its end.
         ConfigError: if the mission, noise profile or colour is unknown.
     """
-    from duckielib.ros import install_modules
+    from duckielib.ros.modules import modules_installed
 
-    install_modules()  # the solution's nodes import rospy: the in-process graph's
     chosen = mission_named(mission) if isinstance(mission, str) else mission
     if stop_color is not None:
         chosen = chosen.with_stop_color(stop_color)
     label = "the reference" if solution is None else "your"
-    parts = _solution(solution)
+    with modules_installed():  # the nodes import rospy: the in-process graph's
+        parts = _solution(solution)
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     _clear(folder)
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
-    namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit, echo)
+    with modules_installed():
+        namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit, echo)
 
     from duckielib.bags import pose_tracks
 
@@ -363,15 +364,10 @@ def _trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> 
 
 
 def _animation(tracks: List[Any], path: Path) -> Path:
-    from matplotlib.animation import PillowWriter
-
     from duckielib import plots
 
     duration = max(float(track.t[-1]) for track in tracks)
     fps = 8.0
     speed = max(1.0, duration / 10.0)  # about 10 s of animation, 80 frames
     animation = plots.animate_path(tracks, fps=fps, speed=speed)
-    partial = path.with_name(path.stem + ".partial.gif")
-    animation.save(str(partial), writer=PillowWriter(fps=fps), dpi=60)
-    partial.replace(path)
-    return path
+    return plots.save_animation(animation, path, fps=fps, dpi=60)

@@ -484,12 +484,13 @@ def _module_from_source(source: str, filename: str) -> types.ModuleType:
     linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
     sys.modules[name] = module
     # Node parts import rospy and the message packages, as on the robot; in-process they are
-    # served by duckielib's graph (a real ROS installation on the path is used instead).
-    from duckielib.ros.modules import install_modules
+    # served by duckielib's graph (a real ROS installation on the path is used instead), for
+    # this import only.
+    from duckielib.ros.modules import modules_installed
 
-    install_modules()
     try:
-        exec(compile(source, filename, "exec"), module.__dict__)
+        with modules_installed():
+            exec(compile(source, filename, "exec"), module.__dict__)
     except Exception as error:
         sys.modules.pop(name, None)
         raise SolutionError(

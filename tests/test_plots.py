@@ -333,3 +333,14 @@ def test_plots_imports_only_numpy_matplotlib_and_the_pure_modules():
     at_import = imported_modules(node for node in tree.body)
     assert "matplotlib.pyplot" in everywhere
     assert "matplotlib.pyplot" not in at_import
+
+
+def test_save_animation_writes_a_whole_gif_or_refuses(tmp_path):
+    anim = plots.animate_path(line(), fps=2.0)
+    path = plots.save_animation(anim, tmp_path / "run.gif", fps=2.0, dpi=20)
+    assert path.read_bytes()[:6] == b"GIF89a"
+    assert [item.name for item in tmp_path.iterdir()] == ["run.gif"]
+    with pytest.raises(DuckielibError, match=r"must end in \.gif"):
+        plots.save_animation(anim, tmp_path / "run.mp4")
+    with pytest.raises(DuckielibError, match="no folder"):
+        plots.save_animation(anim, tmp_path / "missing" / "run.gif")

@@ -8,15 +8,16 @@ installation on the Python path is never shadowed unless ``replace_real=True`` i
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import sys
 import types
-from typing import Dict, List
+from typing import Dict, Iterator, List
 
 from duckielib import messages
 from duckielib.ros import dtros, rospy
 
-__all__ = ["install_modules", "uninstall_modules"]
+__all__ = ["install_modules", "modules_installed", "uninstall_modules"]
 
 _MESSAGE_PACKAGES = ("std_msgs", "sensor_msgs", "duckietown_msgs", "std_srvs")
 
@@ -78,3 +79,22 @@ def uninstall_modules() -> None:
         for name in modules:
             if name in sys.modules and _is_ours(sys.modules[name]):
                 del sys.modules[name]
+
+
+@contextlib.contextmanager
+def modules_installed() -> Iterator[List[str]]:
+    """:func:`install_modules` for the duration of a ``with`` block, then exactly as before.
+
+    Code imported inside the block keeps the modules it imported; the rest of the process
+    (a real ROS installation, another test) sees ``sys.modules`` as it was.
+    """
+    names = [name for modules in _aliases().values() for name in modules]
+    before = {name: sys.modules.get(name) for name in names}
+    try:
+        yield install_modules()
+    finally:
+        for name, module in before.items():
+            if module is None:
+                sys.modules.pop(name, None)
+            else:
+                sys.modules[name] = module
