@@ -275,12 +275,12 @@ def mission_report(
     done = [t for t, name in announcements if name == DONE]
     report.finished = bool(done)
     states = [(t, name) for t, name in announcements if name != DONE]
-    last_time = bag_end = max(
+    last_time = max(
         [t for t, _ in announcements]
         + [float(track.t[-1]) for track in (truth, odometry) if track is not None]
         + [0.0]
     )
-    end_time = done[0] if done else bag_end
+    end_time = done[0] if done else last_time
     for index, (start, name) in enumerate(states):
         end = states[index + 1][0] if index + 1 < len(states) else end_time
         # The colour shown once the state has begun: half a second in (or half-way through

@@ -27,7 +27,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 from duckielib.behaviour import DONE, MissionReport, mission_report
 from duckielib.errors import DuckielibError
@@ -188,7 +188,6 @@ def run_mission(
     stop_color: Optional[str] = None,
     animation: bool = True,
     time_limit: float = DEFAULT_TIME_LIMIT_S,
-    echo: Optional[Callable[[str], None]] = None,
 ) -> MissionRun:
     """Run ``mission`` on the virtual Duckiebot with ``solution`` and write its files to ``out``.
 
@@ -204,7 +203,6 @@ def run_mission(
         stop_color: the LED pattern of the stop states, if not the mission's (``"RED"``).
         animation: whether to write ``mission.gif`` (it takes a few seconds).
         time_limit: simulated seconds after which an unfinished mission is stopped.
-        echo: called with each log line of the nodes as it happens (None: kept in log.txt).
 
     Returns:
         The run: its report, summary and files.
@@ -227,7 +225,7 @@ def run_mission(
     _clear(folder)
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
     with modules_installed():
-        namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit, echo)
+        namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit)
 
     from duckielib.bags import pose_tracks
 
@@ -263,7 +261,6 @@ def _drive(
     seed: int,
     files: Dict[str, Path],
     time_limit: float,
-    echo: Optional[Callable[[str], None]],
 ) -> Tuple[str, float, float]:
     """Run the mission's nodes on a new virtual Duckiebot, recording the bag and the log.
 
@@ -316,9 +313,6 @@ def _drive(
         simulated = bot.time
         log = "\n".join(repr(record) for record in graph.log) + "\n"
         files["log"].write_text(log, encoding="utf-8")
-    if echo is not None:
-        for record in graph.log:
-            echo(repr(record))
     if crash is not None:
         raise (SolutionError if crash.startswith("Finish notebook") else MissionError)(
             f"{crash} The run's log is in {files['log']}."

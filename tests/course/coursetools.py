@@ -65,9 +65,22 @@ def wrong_solutions() -> dict:
         for grade_id, mistakes in namespace["WRONG"].items():
             owner = owners.get(grade_id, [])
             assert len(owner) == 1, f"{path.name}: {grade_id} is graded in {owner or 'no'} notebook"
-            for mistake, text in mistakes.items():
-                found[(owner[0], grade_id, mistake)] = text
+            for mistake, cell in mistakes.items():
+                found[(owner[0], grade_id, mistake)] = (
+                    cell
+                    if isinstance(cell, str)
+                    else edited_reference(owner[0], grade_id, cell, f"{path.name}: {mistake}")
+                )
     return found
+
+
+def edited_reference(name: str, grade_id: str, edits, label: str) -> str:
+    """The reference source of a graded cell with ``(old, new)`` edits, each found once."""
+    text = source(graded_cells(load_solution_nb(name))[grade_id])
+    for old, new in edits:
+        assert text.count(old) == 1, f"{label}: {old!r} is not in the reference exactly once"
+        text = text.replace(old, new)
+    return text
 
 
 @functools.lru_cache(maxsize=None)
