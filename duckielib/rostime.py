@@ -25,6 +25,9 @@ class _TimeValue:
     __slots__ = ("secs", "nsecs")
 
     def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
+        if type(secs) is int and type(nsecs) is int and 0 <= nsecs < _NS_PER_S:
+            self.secs, self.nsecs = secs, nsecs  # already normalised: the common case
+            return
         if not isinstance(secs, Real) or not isinstance(nsecs, Real):
             raise TypeError(
                 f"{type(self).__name__} takes numbers of seconds and nanoseconds, "
@@ -125,7 +128,7 @@ class Time(_TimeValue):
     __slots__ = ()
 
     def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
-        super().__init__(secs, nsecs)
+        _TimeValue.__init__(self, secs, nsecs)
         if self.secs < 0:
             raise ValueError(f"Time cannot be negative (got {self.to_sec()} s).")
 

@@ -24,6 +24,7 @@ from typing import Any, Callable, ClassVar, Dict, List, Tuple
 from duckielib.errors import MessageError
 from duckielib.rostime import Duration, Time
 
+from .codegen import make_init, make_reader, make_writer
 from .spec import Field, MessageSpec
 
 __all__ = ["Message", "Service", "make_message_class", "make_service_class"]
@@ -47,6 +48,9 @@ _UINT32 = struct.Struct("<I")
 _TIME = struct.Struct("<II")
 _DURATION = struct.Struct("<ii")
 _SHORT_ARRAY = 16
+#: What packing a field with a value of the wrong type or size raises.
+_WRITE_ERRORS = (struct.error, TypeError, ValueError, OverflowError, AttributeError)
+_set = object.__setattr__
 
 
 def _integer_range(type_name: str) -> Tuple[int, int]:
@@ -66,12 +70,14 @@ class _Codec:
         default: Callable[[], Any],
         write: Callable[[bytearray, Any], None],
         read: Callable[[memoryview, int], Tuple[Any, int]],
+        message_class: Any = None,
     ) -> None:
         self.describe = describe
         self.check = check
         self.default = default
         self.write = write
         self.read = read
+        self.message_class = message_class
 
 
 def _is_real(value: Any) -> bool:
@@ -182,6 +188,7 @@ def _message_codec(message_class: type) -> _Codec:
         message_class,
         write,
         read,
+        message_class,
     )
 
 
@@ -314,16 +321,18 @@ class Message:
                 f"but got {len(args)} values; use keywords to set only some."
             )
         values = dict(zip(self.__slots__, args)) if args else kwds
+        codecs = self._codecs
         for key in values:
-            if key not in self._codecs:
+            if key not in codecs:
                 raise AttributeError(
                     f"{name} has no field {key!r}; its fields are: {', '.join(self.__slots__)}."
                 )
-        for key, codec in self._codecs.items():
-            if key in values and values[key] is not None:
-                setattr(self, key, values[key])
+        for key, codec in codecs.items():
+            value = values.get(key)
+            if value is None:
+                _set(self, key, codec.default())
             else:
-                object.__setattr__(self, key, codec.default())
+                _set(self, key, codec.accept(name, value))
 
     def __setattr__(self, key: str, value: Any) -> None:
         codec = self._codecs.get(key)
@@ -347,19 +356,12 @@ class Message:
                     item._check_types()
 
     # -- ROS 1 wire format -----------------------------------------------------------------
+    # Each message class gets its own generated ``_write(out)`` and ``_read(data, offset)``
+    # (see :mod:`.codegen`); these two are for the fieldless base class.
     def _write(self, out: bytearray) -> None:
-        for key, codec in self._codecs.items():
-            codec.write(out, getattr(self, key))
+        pass
 
     def _read(self, data: memoryview, offset: int) -> int:
-        for key, codec in self._codecs.items():
-            try:
-                value, offset = codec.read(data, offset)
-            except struct.error:
-                raise MessageError(
-                    f"The serialized {self._type} is cut short in field {key!r}."
-                ) from None
-            object.__setattr__(self, key, value)
         return offset
 
     def serialize(self, buff: Any) -> None:
@@ -371,10 +373,17 @@ class Message:
         buff.write(self.to_bytes())
 
     def to_bytes(self) -> bytes:
-        """The message in ROS 1's wire format, as stored in a bag."""
-        self._check_types()
+        """The message in ROS 1's wire format, as stored in a bag.
+
+        Raises:
+            MessageError: if a field holds a value its type cannot carry.
+        """
         out = bytearray()
-        self._write(out)
+        try:
+            self._write(out)
+        except _WRITE_ERRORS as error:
+            self._check_types()  # says which field is wrong, and how
+            raise MessageError(f"This {self._type} cannot be serialized: {error}.") from None
         return bytes(out)
 
     def deserialize(self, data: bytes) -> Message:
@@ -511,7 +520,11 @@ def make_message_class(
     }
     for constant in spec.constants:
         namespace[constant.name] = constant.value
-    return type(spec.short_name, (Message,), namespace)
+    message_class = type(spec.short_name, (Message,), namespace)
+    message_class._write = make_writer(message_class)
+    message_class._read = make_reader(message_class)
+    message_class.__init__ = make_init(message_class, Message.__init__)
+    return message_class
 
 
 def make_service_class(

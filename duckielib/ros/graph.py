@@ -569,13 +569,21 @@ def current_graph() -> Graph:
     return default_graph()
 
 
+def node_stack() -> List[Any]:
+    """The calling thread's stack of nodes whose callbacks are running (innermost last)."""
+    try:
+        return _local.stack
+    except AttributeError:
+        _local.stack = []
+        return _local.stack
+
+
 @contextlib.contextmanager
 def node_context(node: Any) -> Iterator[Any]:
     """Run code as ``node``: callbacks and service handlers run inside this context."""
-    if not hasattr(_local, "stack"):
-        _local.stack = []
-    _local.stack.append(node)
+    stack = node_stack()
+    stack.append(node)
     try:
         yield node
     finally:
-        _local.stack.pop()
+        stack.pop()

@@ -6,7 +6,7 @@ Node code never uses these classes directly: it calls rospy's functions
 
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from duckielib.ros import names
 from duckielib.ros.exceptions import ROSException
@@ -25,6 +25,8 @@ class TopicRecord:
         self.subscribers: List[Any] = []
         self.latched: Dict[Any, bytes] = {}
         self.message_count = 0
+        self._header: Dict[str, str] = {}
+        self._header_key: Tuple[Any, ...] = ()
 
     @property
     def type(self) -> str:
@@ -33,6 +35,12 @@ class TopicRecord:
 
     def connection_header(self) -> Dict[str, str]:
         """What a ROS 1 connection header says of this topic (for ``AnyMsg`` subscribers)."""
+        key = (self.data_class, *self.publishers)
+        if self._header_key != key:
+            self._header, self._header_key = self._make_connection_header(), key
+        return dict(self._header)
+
+    def _make_connection_header(self) -> Dict[str, str]:
         callers = [publisher.node.name for publisher in self.publishers]
         return {
             "topic": self.name,

@@ -50,6 +50,7 @@ from duckielib.ros.graph import (
     current_node,
     format_error,
     node_context,
+    node_stack,
 )
 from duckielib.ros.node import Node, ServiceRecord, TopicRecord
 
@@ -584,20 +585,24 @@ class Subscriber:
 
     def _drain(self) -> None:
         self._scheduled = False
-        while self._queue and self._record is not None:
-            message = self.data_class.from_bytes(self._queue.popleft())
+        queue = self._queue
+        stack = node_stack()
+        while queue and self._record is not None:
+            message = self.data_class.from_bytes(queue.popleft())
             if self.data_class is AnyMsg:
                 message._connection_header = self._record.connection_header()
             if self.callback is None:
                 continue
-            with node_context(self._node):
-                try:
-                    if self.callback_args is None:
-                        self.callback(message)
-                    else:
-                        self.callback(message, self.callback_args)
-                except Exception as error:
-                    self._node.log(ERROR, f"bad callback on {self.name}:\n{format_error(error)}")
+            stack.append(self._node)  # the callback runs as its node
+            try:
+                if self.callback_args is None:
+                    self.callback(message)
+                else:
+                    self.callback(message, self.callback_args)
+            except Exception as error:
+                self._node.log(ERROR, f"bad callback on {self.name}:\n{format_error(error)}")
+            finally:
+                stack.pop()
 
     def get_num_connections(self) -> int:
         """How many publishers the topic has."""
