@@ -16,12 +16,13 @@ LAB_ARGS ?=
 ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-genpy \
 	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv
 
-.PHONY: help run test lab ros lint format bench lock clean
+.PHONY: help run test lab robot ros lint format bench lock clean
 
 help:
 	@echo "make run     drive the square-then-circle task in the simulator (bag, plot, summary)"
 	@echo "make test    run the whole test suite"
 	@echo "make lab     start JupyterLab on the course notebooks"
+	@echo "make robot   ready robot_nodes/ for the robot (SOLUTION=course: with your notebooks)"
 	@echo "make ros     install Debian's ROS 1 packages and bubblewrap (needs apt, root or sudo)"
 	@echo "make lint    check and format the code with ruff"
 	@echo "make bench   list the benchmarks (run one with: .venv/bin/duckie bench NAME)"
@@ -44,6 +45,11 @@ test: $(STAMP)
 lab: $(STAMP)
 	@test -d course || { echo "course/ has no released notebooks yet: see the README's status section."; exit 1; }
 	$(BIN)/jupyter lab --notebook-dir=course $(LAB_ROOT) $(LAB_ARGS)
+
+# The course library and a solution into robot_nodes/deploy/: the reference solution unless
+# told (make robot SOLUTION=course).
+robot: $(STAMP)
+	$(BIN)/duckie robot prepare $(if $(SOLUTION),--solution $(SOLUTION))
 
 ros:
 	$(SUDO) apt-get update

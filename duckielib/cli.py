@@ -151,6 +151,34 @@ def _mission(args: argparse.Namespace) -> int:
     return 0
 
 
+def _robot_prepare(args: argparse.Namespace) -> int:
+    from duckielib.robot_project import prepare
+
+    prepare(solution=args.solution, project=args.project)
+    return 0
+
+
+def _add_robot(commands: argparse._SubParsersAction) -> None:
+    """``duckie robot ...``: from the notebooks to a real Duckiebot."""
+    robot = commands.add_parser("robot", help="get your solution ready for a real Duckiebot")
+    robot_commands = robot.add_subparsers(
+        dest="robot_command", metavar="ROBOT_COMMAND", required=True
+    )
+    robot_prepare = robot_commands.add_parser(
+        "prepare",
+        help="write the course library and your solution into robot_nodes/deploy/",
+    )
+    robot_prepare.add_argument(
+        "--solution",
+        help="your notebooks' folder or a file made by duckie export (default: the reference)",
+    )
+    robot_prepare.add_argument(
+        "--project",
+        help="the Duckietown project to prepare (default: the course's robot_nodes/)",
+    )
+    robot_prepare.set_defaults(handler=_robot_prepare)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="duckie",
@@ -249,6 +277,8 @@ def _parser() -> argparse.ArgumentParser:
     repair.add_argument("output", help="the repaired bag to write")
     repair.add_argument("--compression", choices=("none", "bz2"), default="none")
     repair.set_defaults(handler=_bag_repair)
+
+    _add_robot(commands)
 
     bench = commands.add_parser("bench", help="run a benchmark and print its figures")
     bench.add_argument("name", nargs="?", help="benchmark to run; omit to list them")

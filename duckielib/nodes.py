@@ -15,12 +15,13 @@ Pure: standard library only, Python 3.8 (deployed to the robot).
 from __future__ import annotations
 
 import importlib
+import time
 from typing import Any, Sequence
 
 from duckielib.missions import TASK_START
 from duckielib.odometry import Odometry
 
-__all__ = ["odometry_node"]
+__all__ = ["camera_republisher_node", "odometry_node"]
 
 
 def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START) -> None:
@@ -39,6 +40,7 @@ def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START
     """
     msg = importlib.import_module("duckietown_msgs.msg")
     rospy.init_node("odometry_node")
+    _wait_for_params(rospy, ["left_wheel_encoder_node/resolution", "kinematics_node/radius"])
     odometry = Odometry(
         solution,
         resolution=int(rospy.get_param("left_wheel_encoder_node/resolution")),
@@ -65,4 +67,38 @@ def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START
             callback_args=wheel,
             queue_size=10,
         )
+    rospy.spin()
+
+
+def _wait_for_params(rospy: Any, names: Sequence[str]) -> None:
+    """Wait until the robot's drivers have set ``names`` (a node may start before them)."""
+    waiting = False
+    while not all(rospy.has_param(name) for name in names) and not rospy.is_shutdown():
+        if not waiting:
+            rospy.loginfo(f"Waiting for the robot's drivers to set {', '.join(names)}...")
+            waiting = True
+        time.sleep(0.1)  # wall clock: before the drivers run, simulated time may not move
+
+
+def camera_republisher_node(rospy: Any, every: int = 1) -> None:
+    """Republish the camera's JPEG frames on ``~image/compressed``, every ``every``-th one.
+
+    A laptop that watches the robot's camera subscribes here instead of to the driver, and
+    ``every=3`` sends it 10 of the camera's 30 frames a second.
+
+    Args:
+        rospy: the rospy module to run with.
+        every: republish one frame in this many (1: all of them).
+    """
+    msg = importlib.import_module("sensor_msgs.msg")
+    rospy.init_node("camera_republisher_node")
+    publisher = rospy.Publisher("~image/compressed", msg.CompressedImage, queue_size=1)
+    count = [0]
+
+    def on_image(image: Any) -> None:
+        count[0] += 1
+        if (count[0] - 1) % max(1, every) == 0:
+            publisher.publish(image)
+
+    rospy.Subscriber("camera_node/image/compressed", msg.CompressedImage, on_image, queue_size=1)
     rospy.spin()

@@ -218,13 +218,14 @@ def run_mission(
     if stop_color is not None:
         chosen = chosen.with_stop_color(stop_color)
     label = "the reference" if solution is None else "your"
-    with modules_installed():  # the nodes import rospy: the in-process graph's
+    # The nodes import rospy: the in-process graph's, even where a real ROS is installed.
+    with modules_installed(replace_real=True):
         parts = _solution(solution)
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
     _clear(folder)
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
-    with modules_installed():
+    with modules_installed(replace_real=True):
         namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit)
 
     from duckielib.bags import pose_tracks

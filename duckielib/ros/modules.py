@@ -82,16 +82,20 @@ def uninstall_modules() -> None:
 
 
 @contextlib.contextmanager
-def modules_installed() -> Iterator[List[str]]:
+def modules_installed(replace_real: bool = False) -> Iterator[List[str]]:
     """:func:`install_modules` for the duration of a ``with`` block, then exactly as before.
 
     Code imported inside the block keeps the modules it imported; the rest of the process
     (a real ROS installation, another test) sees ``sys.modules`` as it was.
+
+    Args:
+        replace_real: serve the in-process modules even where a real ROS is importable (for
+            code that runs on the in-process graph whatever else is installed).
     """
     names = [name for modules in _aliases().values() for name in modules]
     before = {name: sys.modules.get(name) for name in names}
     try:
-        yield install_modules()
+        yield install_modules(replace_real)
     finally:
         for name, module in before.items():
             if module is None:

@@ -32,18 +32,7 @@ from typing import Any, Sequence, Tuple
 from duckielib import leds as led_tables
 from duckielib.config import RobotConfig
 from duckielib.errors import ConfigError, SimulationError
-from duckielib.messages import (
-    BoolStamped,
-    ChangePattern,
-    ColorRGBA,
-    CompressedImage,
-    LEDPattern,
-    Pose2DStamped,
-    SetCustomLEDPattern,
-    Twist2DStamped,
-    WheelEncoderStamped,
-    WheelsCmdStamped,
-)
+from duckielib.ros.backend import message_classes
 from duckielib.sim.encoders import EncoderReading
 from duckielib.sim.simulator import Simulator
 
@@ -80,22 +69,23 @@ class WheelsDriverNode:
     """
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
+        self.msg = message_classes(rospy)
         self.rospy = rospy
         self.sim = sim
         self.estop = False
         base = veh + "wheels_driver_node/"
         self.pub_executed = rospy.Publisher(
-            base + "wheels_cmd_executed", WheelsCmdStamped, queue_size=1
+            base + "wheels_cmd_executed", self.msg.WheelsCmdStamped, queue_size=1
         )
         self.sub_cmd = rospy.Subscriber(
-            base + "wheels_cmd", WheelsCmdStamped, self.on_wheels_cmd, queue_size=1
+            base + "wheels_cmd", self.msg.WheelsCmdStamped, self.on_wheels_cmd, queue_size=1
         )
         self.sub_estop = rospy.Subscriber(
-            base + "emergency_stop", BoolStamped, self.on_emergency_stop, queue_size=1
+            base + "emergency_stop", self.msg.BoolStamped, self.on_emergency_stop, queue_size=1
         )
         rospy.on_shutdown(self.on_shutdown)
 
-    def on_wheels_cmd(self, msg: WheelsCmdStamped) -> None:
+    def on_wheels_cmd(self, msg: Any) -> None:
         """Execute a command (zeros while the emergency stop is on) and report it."""
         left, right = (0.0, 0.0) if self.estop else (msg.vel_left, msg.vel_right)
         try:
@@ -103,12 +93,12 @@ class WheelsDriverNode:
         except SimulationError as error:
             self.rospy.logerr(f"Ignored a wheels command: {error}")
             return
-        executed = WheelsCmdStamped(vel_left=left, vel_right=right)
+        executed = self.msg.WheelsCmdStamped(vel_left=left, vel_right=right)
         executed.header.frame_id = msg.header.frame_id
         executed.header.stamp = self.rospy.Time.now()
         self.pub_executed.publish(executed)
 
-    def on_emergency_stop(self, msg: BoolStamped) -> None:
+    def on_emergency_stop(self, msg: Any) -> None:
         """Engage or release the emergency stop."""
         self.estop = bool(msg.data)
         if self.estop:
@@ -135,6 +125,7 @@ class WheelEncoderNode:
     """
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str, wheel: str) -> None:
+        self.msg = message_classes(rospy)
         self.rospy = rospy
         self.wheel = wheel
         base = f"{veh}{wheel}_wheel_encoder_node/"
@@ -142,14 +133,14 @@ class WheelEncoderNode:
         rospy.set_param(base + "publish_frequency", sim.config.encoder_rate_hz)
         self.frame_id = f"{veh.strip('/')}/{wheel}_wheel_axis"
         self.resolution = sim.config.resolution
-        self.pub_tick = rospy.Publisher(base + "tick", WheelEncoderStamped, queue_size=1)
+        self.pub_tick = rospy.Publisher(base + "tick", self.msg.WheelEncoderStamped, queue_size=1)
 
     def publish(self, reading: EncoderReading) -> None:
         """Publish one encoder sample."""
-        msg = WheelEncoderStamped(
+        msg = self.msg.WheelEncoderStamped(
             data=reading.ticks,
             resolution=self.resolution,
-            type=WheelEncoderStamped.ENCODER_TYPE_INCREMENTAL,
+            type=self.msg.WheelEncoderStamped.ENCODER_TYPE_INCREMENTAL,
         )
         msg.header.stamp = stamp_at(self.rospy, round(reading.time * _NS_PER_S))
         msg.header.frame_id = self.frame_id
@@ -172,17 +163,20 @@ class KinematicsNode:
     """
 
     def __init__(self, rospy: Any, veh: str, config: RobotConfig) -> None:
+        self.msg = message_classes(rospy)
         self.rospy = rospy
         self.base = veh + "kinematics_node/"
         for name, value in config.kinematics_params().items():
             if not rospy.has_param(self.base + name):
                 rospy.set_param(self.base + name, value)
         self.pub_wheels = rospy.Publisher(
-            veh + "wheels_driver_node/wheels_cmd", WheelsCmdStamped, queue_size=1
+            veh + "wheels_driver_node/wheels_cmd", self.msg.WheelsCmdStamped, queue_size=1
         )
-        self.pub_velocity = rospy.Publisher(self.base + "velocity", Twist2DStamped, queue_size=1)
+        self.pub_velocity = rospy.Publisher(
+            self.base + "velocity", self.msg.Twist2DStamped, queue_size=1
+        )
         self.sub_car_cmd = rospy.Subscriber(
-            veh + "car_cmd_switch_node/cmd", Twist2DStamped, self.on_car_cmd, queue_size=1
+            veh + "car_cmd_switch_node/cmd", self.msg.Twist2DStamped, self.on_car_cmd, queue_size=1
         )
 
     def _params(self) -> Tuple[float, ...]:
@@ -198,7 +192,7 @@ class KinematicsNode:
             found.append(float(value))
         return tuple(found)
 
-    def on_car_cmd(self, msg: Twist2DStamped) -> None:
+    def on_car_cmd(self, msg: Any) -> None:
         """Command the wheels for (v, omega) and publish the resulting velocity."""
         try:
             radius, baseline, gain, trim, k, limit, v_max, omega_max = self._params()
@@ -214,12 +208,12 @@ class KinematicsNode:
         k_l_inv = (gain - trim) / k
         u_r = min(max(omega_r * k_r_inv, -limit), limit)
         u_l = min(max(omega_l * k_l_inv, -limit), limit)
-        wheels = WheelsCmdStamped(vel_left=u_l, vel_right=u_r)
+        wheels = self.msg.WheelsCmdStamped(vel_left=u_l, vel_right=u_r)
         wheels.header = msg.header
         self.pub_wheels.publish(wheels)
         omega_r = u_r / k_r_inv if k_r_inv else 0.0
         omega_l = u_l / k_l_inv if k_l_inv else 0.0
-        velocity = Twist2DStamped(
+        velocity = self.msg.Twist2DStamped(
             v=radius * (omega_r + omega_l) / 2.0,
             omega=radius * (omega_r - omega_l) / baseline,
         )
@@ -239,11 +233,15 @@ class CarCmdSwitchNode:
     """
 
     def __init__(self, rospy: Any, veh: str) -> None:
+        self.msg = message_classes(rospy)
         self.pub_cmd = rospy.Publisher(
-            veh + "car_cmd_switch_node/cmd", Twist2DStamped, queue_size=1
+            veh + "car_cmd_switch_node/cmd", self.msg.Twist2DStamped, queue_size=1
         )
         self.sub_joystick = rospy.Subscriber(
-            veh + "joy_mapper_node/car_cmd", Twist2DStamped, self.pub_cmd.publish, queue_size=1
+            veh + "joy_mapper_node/car_cmd",
+            self.msg.Twist2DStamped,
+            self.pub_cmd.publish,
+            queue_size=1,
         )
 
 
@@ -263,17 +261,18 @@ class LEDEmitterNode:
     """
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
+        self.msg = message_classes(rospy)
         self.rospy = rospy
         self.sim = sim
         base = veh + "led_emitter_node/"
         self.pub_pattern = rospy.Publisher(
-            base + "led_pattern", LEDPattern, queue_size=1, latch=True
+            base + "led_pattern", self.msg.LEDPattern, queue_size=1, latch=True
         )
         self.srv_set_pattern = rospy.Service(
-            base + "set_pattern", ChangePattern, self.on_set_pattern
+            base + "set_pattern", self.msg.ChangePattern, self.on_set_pattern
         )
         self.srv_set_custom_pattern = rospy.Service(
-            base + "set_custom_pattern", SetCustomLEDPattern, self.on_set_custom_pattern
+            base + "set_custom_pattern", self.msg.SetCustomLEDPattern, self.on_set_custom_pattern
         )
         self.show(led_tables.pattern_named(led_tables.START_PATTERN))
         rospy.on_shutdown(self.on_shutdown)
@@ -282,9 +281,9 @@ class LEDEmitterNode:
         """Send ``pattern`` to the LEDs and publish it."""
         self.sim.show_led_pattern(pattern)
         colors = led_tables.pattern_colors(pattern)
-        msg = LEDPattern(
+        msg = self.msg.LEDPattern(
             color_list=[c if isinstance(c, str) else "custom" for c in pattern.color_list],
-            rgb_vals=[ColorRGBA(r=r, g=g, b=b, a=1.0) for r, g, b in colors],
+            rgb_vals=[self.msg.ColorRGBA(r=r, g=g, b=b, a=1.0) for r, g, b in colors],
             color_mask=[1] * led_tables.LED_COUNT,
             frequency=pattern.frequency,
             frequency_mask=list(pattern.frequency_mask),
@@ -302,7 +301,7 @@ class LEDEmitterNode:
         else:
             self.show(pattern)
             self.rospy.loginfo(f"Pattern changed to {name}.")
-        return ChangePattern._response_class()
+        return self.msg.ChangePattern._response_class()
 
     def on_set_custom_pattern(self, request: Any) -> Any:
         """Show a custom pattern; refuse an invalid one with a ServiceException."""
@@ -321,7 +320,7 @@ class LEDEmitterNode:
             raise self.rospy.ServiceException(str(error)) from None
         self.show(pattern)
         self.rospy.loginfo("Custom pattern set.")
-        return SetCustomLEDPattern._response_class()
+        return self.msg.SetCustomLEDPattern._response_class()
 
     def on_shutdown(self) -> None:
         """Turn the LEDs off."""
@@ -336,18 +335,19 @@ class CameraNode:
     """
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
+        self.msg = message_classes(rospy)
         self.rospy = rospy
         self.sim = sim
         self.frame_id = veh.strip("/") + "/camera_optical_frame"
         self.pub_image = rospy.Publisher(
-            veh + "camera_node/image/compressed", CompressedImage, queue_size=1
+            veh + "camera_node/image/compressed", self.msg.CompressedImage, queue_size=1
         )
 
     def publish(self, t_ns: int) -> bool:
         """Publish the frame of time ``t_ns`` if anyone listens; return whether it did."""
         if self.pub_image.get_num_connections() == 0:
             return False
-        msg = CompressedImage(format="jpeg", data=self.sim.frame_jpeg())
+        msg = self.msg.CompressedImage(format="jpeg", data=self.sim.frame_jpeg())
         msg.header.stamp = stamp_at(self.rospy, t_ns)
         msg.header.frame_id = self.frame_id
         self.pub_image.publish(msg)
@@ -363,16 +363,17 @@ class GroundTruthNode:
     """
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
+        self.msg = message_classes(rospy)
         self.rospy = rospy
         self.sim = sim
         self.pub_pose = rospy.Publisher(
-            veh + "simulator_node/ground_truth_pose", Pose2DStamped, queue_size=1
+            veh + "simulator_node/ground_truth_pose", self.msg.Pose2DStamped, queue_size=1
         )
 
     def publish(self, t_ns: int) -> None:
         """Publish the true pose at time ``t_ns``."""
         x, y, theta = self.sim.pose
-        msg = Pose2DStamped(x=x, y=y, theta=theta)
+        msg = self.msg.Pose2DStamped(x=x, y=y, theta=theta)
         msg.header.stamp = stamp_at(self.rospy, t_ns)
         msg.header.frame_id = "world"
         self.pub_pose.publish(msg)

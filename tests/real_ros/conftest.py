@@ -3,12 +3,29 @@
 from __future__ import annotations
 
 import importlib
+import os
+import shutil
+import signal
+import socket
+import subprocess
 import sys
+import time
+import xmlrpc.client
+from pathlib import Path
+from typing import Dict, Iterator, List
 
 import pytest
 
+from duckielib.solution import export_solution, reference_solution_dir
+
 #: Where Debian installs rospy, genpy, rosbag and the message packages.
 DEBIAN_DIST_PACKAGES = "/usr/lib/python3/dist-packages"
+ROOT = Path(__file__).resolve().parents[2]
+PACKAGES = ROOT / "robot_nodes" / "packages"
+#: The robot's namespace in these tests.
+VEH = "/duckiebot/"
+#: How fast the virtual Duckiebot runs against the wall clock in these tests.
+RATE = 2.0
 
 
 @pytest.fixture(scope="module")
@@ -36,3 +53,104 @@ def ros_import():
             del sys.modules[name]
     if added:
         sys.path.remove(DEBIAN_DIST_PACKAGES)
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def _stop(process: subprocess.Popen, timeout: float = 20) -> None:
+    """End a process group as Ctrl-C does, then harder if it does not listen."""
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGINT)
+        try:
+            process.wait(timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+class Master:
+    """A roscore on loopback and the environment the course's nodes need to use it."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self.uri = f"http://127.0.0.1:{_free_port()}"
+        # In a process of its own: this one keeps Debian's packages off its path.
+        messages = folder / "msgs"
+        subprocess.run(
+            [
+                sys.executable,
+                "-c",
+                "import sys; from duckielib.ros.backend import generate_message_packages as make;"
+                " make(sys.argv[1])",
+                str(messages),
+            ],
+            check=True,
+        )
+        self.solution = folder / "solution.py"
+        self.solution.write_text(export_solution(reference_solution_dir()).source)
+        self.env: Dict[str, str] = dict(
+            os.environ,
+            ROS_MASTER_URI=self.uri,
+            ROS_IP="127.0.0.1",
+            ROS_HOME=str(folder / "ros"),
+            ROS_LOG_DIR=str(folder / "ros" / "log"),
+            ROS_PACKAGE_PATH=str(PACKAGES),
+            PYTHONPATH=os.pathsep.join([str(ROOT), str(messages)]),
+            PATH=os.pathsep.join([str(Path(sys.executable).parent), os.environ["PATH"]]),
+            DUCKIE_SOLUTION=str(self.solution),
+            VEHICLE_NAME=VEH.strip("/"),
+            PYTHONUNBUFFERED="1",
+        )
+        port = self.uri.rsplit(":", 1)[1]
+        self.core = self.start(["roscore", "-p", port], "roscore")
+        self.api = xmlrpc.client.ServerProxy(self.uri)
+        deadline = time.monotonic() + 30
+        while True:
+            try:
+                self.api.getPid("/test")
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    pytest.fail(f"roscore did not start; see {folder / 'roscore.log'}")
+                time.sleep(0.2)
+        # Record times are simulated times, as the nodes' own.
+        self.api.setParam("/test", "/use_sim_time", True)
+
+    def start(self, command: List[str], log: str) -> subprocess.Popen:
+        out = (self.folder / f"{log}.log").open("w")
+        return subprocess.Popen(
+            command, env=self.env, stdout=out, stderr=subprocess.STDOUT, start_new_session=True
+        )
+
+    def subscribed(self, topic: str) -> bool:
+        _, _, (_, subscribers, _) = self.api.getSystemState("/test")
+        return any(name == topic and nodes for name, nodes in subscribers)
+
+    def record(self, bag: Path, topics: List[str]) -> subprocess.Popen:
+        """Start ``rosbag record`` of ``topics`` into ``bag``; return once it listens."""
+        recorder = self.start(["rosbag", "record", "-O", str(bag), *topics], bag.stem)
+        deadline = time.monotonic() + 20
+        while not all(self.subscribed(topic) for topic in topics):
+            assert time.monotonic() < deadline, "rosbag record did not subscribe in 20 s"
+            time.sleep(0.2)
+        return recorder
+
+    rate = RATE
+    stop = staticmethod(_stop)
+
+    def log(self, name: str) -> str:
+        return (self.folder / f"{name}.log").read_text(errors="replace")
+
+
+@pytest.fixture(scope="module")
+def master(tmp_path_factory) -> Iterator[Master]:
+    missing = [tool for tool in ("roscore", "roslaunch", "rosbag") if shutil.which(tool) is None]
+    if missing:
+        pytest.skip(f"Debian's ROS 1 is not installed ({', '.join(missing)}); run `make ros`.")
+    running = Master(tmp_path_factory.mktemp("ros"))
+    yield running
+    running.stop(running.core)
