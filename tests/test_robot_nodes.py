@@ -208,7 +208,9 @@ def test_launcher_follows_the_duckietown_pattern(launcher):
     assert code[0] == "source /environment.sh"
     assert code[1] == "dt-launchfile-init"
     assert code[-1] == "dt-launchfile-join"
-    assert all(line.startswith("dt-exec ") for line in code[2:-1])
+    # Between them: dt-exec lines, and shell variables they use (BAG=...).
+    assert all(line.startswith("dt-exec ") or "=" in line.split()[0] for line in code[2:-1])
+    assert any(line.startswith("dt-exec ") for line in code[2:-1])
 
 
 @pytest.mark.parametrize("launcher", LAUNCHERS, ids=lambda path: path.name)
@@ -311,6 +313,9 @@ def test_launch_file_nodes_are_executable_scripts_of_the_package(launch_file):
     root = ET.parse(launch_file).getroot()
     assert root.tag == "launch"
     for node in root.iter("node"):
+        if node.get("pkg") == "rosbag":  # ROS's own recorder, installed with ROS
+            assert node.get("type") == "record", f"{launch_file.name}: {node.attrib}"
+            continue
         assert node.get("pkg") == PACKAGE.name, f"{launch_file.name}: {node.attrib}"
         script = SCRIPTS / node.get("type")
         assert script.is_file(), f"{launch_file.name} starts a missing {script.name}"
@@ -333,6 +338,7 @@ def test_course_launch():
         "mission": "square_then_circle",
         "stop_color": "RED",
         "camera": "true",
+        "bag": "",
     }
     [group] = root.findall("group")
     assert group.get("ns") == "$(arg veh)"
@@ -342,7 +348,10 @@ def test_course_launch():
         "light_service_node": "light_service_node.py",
         "mission_node": "mission_node.py",
         "camera_republisher_node": "camera_republisher_node.py",
+        "course_recorder": "record",
     }
+    assert "/$(arg veh)/odometry_node/pose" in nodes["course_recorder"].get("args")
+    assert nodes["course_recorder"].get("if") == "$(eval bag != '')"
     mission = nodes["mission_node"]
     assert mission.get("required") == "true"
     params = {param.get("name"): param.get("value") for param in mission.iter("param")}

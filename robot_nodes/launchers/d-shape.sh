@@ -7,7 +7,9 @@ dt-launchfile-init
 
 # The "D" variant of the course's task.
 # VEHICLE_NAME is the robot's name (set by Duckietown; the nodes run under /$VEHICLE_NAME/).
-dt-exec roslaunch course_nodes course.launch veh:="$VEHICLE_NAME" mission:=d_shape
+# The run is recorded to /data/logs/ on the robot (copy it to the laptop for notebook 10).
+BAG="/data/logs/course_$(date +%Y%m%d_%H%M%S).bag"
+dt-exec roslaunch course_nodes course.launch veh:="$VEHICLE_NAME" bag:="$BAG" mission:=d_shape
 
 # wait for app to end
 dt-launchfile-join

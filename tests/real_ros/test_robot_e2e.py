@@ -37,7 +37,14 @@ def mission_run(master):
     recorder = master.record(bag, RECORDED)
     started = time.monotonic()
     launch = master.start(
-        ["roslaunch", "course_nodes", "simulation.launch", f"rate:={master.rate}", "camera:=false"],
+        [
+            "roslaunch",
+            "course_nodes",
+            "simulation.launch",
+            f"rate:={master.rate}",
+            "camera:=false",
+            f"bag:={master.folder / 'robot_side.bag'}",
+        ],
         "roslaunch",
     )
     try:
@@ -86,3 +93,16 @@ def test_rosbag_record_has_the_pose_and_matches_the_in_process_run(mission_run, 
         assert abs(ours - theirs) < 0.05
     assert abs(real.total_time - in_process.total_time) < 3.0
     assert [state.name for state in real.states] == [state.name for state in in_process.states]
+
+
+def test_the_launch_file_records_the_run_as_on_the_robot(mission_run, master):
+    path = master.folder / "robot_side.bag"
+    deadline = time.monotonic() + 20  # roslaunch stops its recorder as the launch ends
+    while not path.exists():
+        assert time.monotonic() < deadline, "course.launch's recorder left no bag"
+        time.sleep(0.1)
+    robot_side = Bag(path)
+    for topic in ("odometry_node/pose", "left_wheel_encoder_node/tick", "mission_node/state"):
+        assert robot_side.topics[VEH + topic].count > 0, topic
+    announced = [item.message.data for item in robot_side.read(VEH + "mission_node/state")]
+    assert announced == [state.name for state in SQUARE_THEN_CIRCLE.states] + ["done"]
