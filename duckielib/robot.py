@@ -118,7 +118,13 @@ def mission_main(argv: Optional[List[str]] = None) -> None:
     if arguments.stop_color:
         mission = mission.with_stop_color(arguments.stop_color)
     guards: List[SafetyGuard] = []
-    restore = guarded_init(rospy, lambda: guards.append(SafetyGuard(rospy)))
+    warm: List[Any] = []
+
+    def on_init() -> None:
+        guards.append(SafetyGuard(rospy))
+        warm.append(_connect_listeners(rospy, "~state"))
+
+    restore = guarded_init(rospy, on_init)
     try:
         solution.mission_node(mission)
     except rospy.ROSInterruptException:
@@ -132,6 +138,38 @@ def mission_main(argv: Optional[List[str]] = None) -> None:
     for guard in guards:
         guard.stop("the mission finished")
         guard.close()
+
+
+def _connect_listeners(rospy: Any, topic: str, timeout: float = 3.0) -> Any:
+    """Connect ``topic``'s publisher to its subscribers before the node's own code publishes.
+
+    A message published before a subscriber's connection is up reaches it late (latched) or
+    never. The mission's first state announcement matters (a recorder times the first stop
+    from it), so the publisher is created here, right after ``init_node``, and given up to
+    ``timeout`` seconds (wall clock) to connect to every subscriber the master knows; the
+    node's own publisher on the same topic then shares the connections, as rospy does.
+
+    Returns:
+        The publisher (keep it: the connections live as long as a publisher does).
+    """
+    import time
+
+    import rosgraph
+    from std_msgs.msg import String
+
+    publisher = rospy.Publisher(topic, String, queue_size=10)
+    name = publisher.resolved_name
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and not rospy.is_shutdown():
+        try:
+            _, subscribed, _ = rosgraph.Master(rospy.get_name()).getSystemState()
+        except Exception:  # the master is busy or gone: nothing to wait for
+            return publisher
+        wanted = sum(len(nodes) for found, nodes in subscribed if found == name)
+        if publisher.get_num_connections() >= wanted:
+            break
+        time.sleep(0.05)
+    return publisher
 
 
 def camera_republisher_main() -> None:
