@@ -179,6 +179,63 @@ def _add_robot(commands: argparse._SubParsersAction) -> None:
     robot_prepare.set_defaults(handler=_robot_prepare)
 
 
+def _grade(args: argparse.Namespace) -> int:
+    import warnings
+    from pathlib import Path
+
+    from autograder.grade import grade_class
+    from autograder.sandbox import check_sandbox
+
+    # nbgrader's own gradebook code warns about its SQLAlchemy session: nothing to act on.
+    warnings.filterwarnings("ignore", module="nbgrader")
+
+    submissions = Path(args.submissions)
+    if not submissions.is_dir():
+        raise DuckielibError(
+            f"There is no folder {submissions}: give the folder that holds one folder (or "
+            ".zip) per student."
+        )
+    if args.jobs < 1:
+        raise DuckielibError(f"--jobs must be 1 or more, not {args.jobs}.")
+    if args.no_sandbox:
+        print("duckie: grading WITHOUT a sandbox: student code runs with your rights.")
+    else:
+        check_sandbox()
+    results = grade_class(
+        submissions,
+        Path(args.out),
+        jobs=args.jobs,
+        use_sandbox=not args.no_sandbox,
+        names=args.assignment or None,
+        progress=lambda line: print(line, flush=True),
+    )
+    troubled = [result for result in results if result.problems]
+    print(
+        f"graded {len(results)} students ({len(troubled)} with problems): "
+        f"{Path(args.out) / 'grades.csv'}"
+    )
+    return 0
+
+
+def _add_grade(commands: argparse._SubParsersAction) -> None:
+    """``duckie grade``: autograde a class with nbgrader, each submission in a sandbox."""
+    grade = commands.add_parser(
+        "grade", help="autograde a class: nbgrader, a sandbox per submission, in parallel"
+    )
+    grade.add_argument("submissions", help="a folder with one folder (or .zip) per student")
+    grade.add_argument("--out", required=True, help="where grades.csv and the work go")
+    grade.add_argument("--jobs", type=int, default=1, help="students graded at once")
+    grade.add_argument(
+        "--assignment", action="append", help="grade only this assignment (repeatable)"
+    )
+    grade.add_argument(
+        "--no-sandbox",
+        action="store_true",
+        help="run student code without bubblewrap (only where it cannot be installed)",
+    )
+    grade.set_defaults(handler=_grade)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="duckie",
@@ -280,6 +337,7 @@ def _parser() -> argparse.ArgumentParser:
 
     _add_robot(commands)
 
+    _add_grade(commands)
     bench = commands.add_parser("bench", help="run a benchmark and print its figures")
     bench.add_argument("name", nargs="?", help="benchmark to run; omit to list them")
     bench.set_defaults(handler=_bench)

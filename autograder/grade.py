@@ -1,0 +1,327 @@
+"""Grading a class: real ``nbgrader autograde`` per student, student code in a sandbox, in parallel.
+
+nbgrader's autograde does two kinds of work: the instructor's (restore the instructor's cells
+and hidden tests from the gradebook, save the scores into it) and the student's (run the
+notebook). Here the first stays with nbgrader, in this process, as the gradebook's one writer;
+the second is handed, by a preprocessor that takes the place of nbgrader's ``Execute``, to
+:mod:`autograder.execute` running inside the sandbox of :mod:`autograder.sandbox`. Several
+students are graded at once by threads: while one student's notebook runs in its sandbox, the
+others' bookkeeping goes on; every gradebook access holds one lock, so grades are written one
+at a time and none is lost. Each sandbox has its own network namespace, so the kernels' ports
+never collide (the race plain nbgrader has when run in parallel).
+
+Input: a folder with one folder (or ``.zip``) per student, holding their assignment folders
+(a copy of ``course/``), or nbgrader's own ``submitted/STUDENT/ASSIGNMENT`` layout.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import zipfile
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Tuple
+
+from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
+from autograder.sandbox import NOBODY, Limits, sandboxed_command
+
+__all__ = ["StudentResult", "grade_class", "find_submissions"]
+
+_EXECUTE = Path(__file__).resolve().parent / "execute.py"
+_GRADEBOOK = threading.RLock()
+
+
+@dataclass
+class StudentResult:
+    """What grading one student gave.
+
+    Attributes:
+        student: the student's id (their folder's name).
+        cells: ``(assignment, grade_id) -> (score, max_score)``.
+        problems: one sentence each: what went wrong while grading (not failed tests).
+        seconds: wall-clock seconds spent on this student.
+    """
+
+    student: str
+    cells: Dict[Tuple[str, str], Tuple[float, float]] = field(default_factory=dict)
+    problems: List[str] = field(default_factory=list)
+    seconds: float = 0.0
+
+    @property
+    def total(self) -> float:
+        """The points scored, all assignments together."""
+        return sum(score for score, _ in self.cells.values())
+
+    @property
+    def max_total(self) -> float:
+        """The points there were to score."""
+        return sum(most for _, most in self.cells.values())
+
+
+def find_submissions(folder: Path, work: Path) -> Tuple[Dict[str, Path], List[str]]:
+    """The students' folders in ``folder`` (zips unpacked into ``work``), and what was skipped."""
+    folder = Path(folder)
+    if (folder / "submitted").is_dir():
+        folder = folder / "submitted"
+    found: Dict[str, Path] = {}
+    skipped: List[str] = []
+    for entry in sorted(folder.iterdir()):
+        name = entry.stem if entry.suffix == ".zip" else entry.name
+        if name.startswith("."):
+            continue
+        if entry.is_dir():
+            found[name] = entry
+        elif entry.suffix == ".zip":
+            target = work / "unzipped" / name
+            try:
+                with zipfile.ZipFile(entry) as archive:
+                    for member in archive.namelist():
+                        if member.startswith("/") or ".." in Path(member).parts:
+                            raise zipfile.BadZipFile(f"unsafe path {member!r}")
+                    archive.extractall(target)
+            except zipfile.BadZipFile as error:
+                skipped.append(f"{entry.name}: not a readable zip ({error})")
+                continue
+            inner = [path for path in target.iterdir() if path.is_dir()]
+            found[name] = inner[0] if len(inner) == 1 and not _has_assignment(target) else target
+        else:
+            skipped.append(f"{entry.name}: neither a folder nor a .zip")
+    return found, skipped
+
+
+def _has_assignment(folder: Path) -> bool:
+    return any(folder.glob("*/*.ipynb"))
+
+
+def _sandboxed_execute_class(
+    limits: Limits, use_sandbox: bool, folders: Dict[str, Path], notes: Dict[str, List[str]]
+):
+    """The class that takes the place of nbgrader's Execute: the notebook runs in the sandbox."""
+    import nbformat
+    from nbgrader.preprocessors import Execute
+
+    class SandboxedExecute(Execute):
+        def preprocess(self, nb, resources):
+            key = f"{resources['nbgrader']['student']}/{resources['nbgrader']['assignment']}"
+            folder = folders[key]
+            command = [sys.executable, str(_EXECUTE), str(limits.cell_seconds)]
+            if use_sandbox:
+                command = sandboxed_command(command, folder, limits)
+            text = nbformat.writes(nb)
+            _GRADEBOOK.release()  # others may use the gradebook while this notebook runs
+            try:
+                result = subprocess.run(
+                    command,
+                    check=False,
+                    input=text,
+                    capture_output=True,
+                    text=True,
+                    timeout=limits.submission_seconds,
+                    cwd=folder,
+                    start_new_session=True,
+                )
+                output = result.stdout
+                problem = None if output.strip() else (result.stderr.strip()[-500:] or "no output")
+            except subprocess.TimeoutExpired:
+                output, problem = "", f"stopped after {limits.submission_seconds} s"
+            finally:
+                _GRADEBOOK.acquire()
+            if problem is not None:
+                from autograder.execute import mark_not_run
+
+                mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
+                notes.setdefault(key, []).append(
+                    f"{resources['nbgrader']['assignment']}: the notebook {problem}"
+                )
+                return nb, resources
+            executed = nbformat.reads(output, as_version=4)
+            return executed, resources
+
+    return SandboxedExecute
+
+
+def _prepare_folder(work: Path, student: str, assignment: str, source: Path) -> Path:
+    """The writable folder a student's notebook runs in: a copy of their assignment files."""
+    folder = work / "sandboxes" / student / assignment
+    if folder.exists():
+        shutil.rmtree(folder)
+    shutil.copytree(source, folder, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
+    for path in [folder, *folder.rglob("*")]:
+        os.chown(path, NOBODY, NOBODY)
+    return folder
+
+
+def grade_class(
+    submissions: Path,
+    out: Path,
+    jobs: int = 1,
+    limits: Optional[Limits] = None,
+    use_sandbox: bool = True,
+    names: Optional[List[str]] = None,
+    source: Path = ROOT / "solutions",
+    progress: Optional[Callable[[str], None]] = None,
+) -> List[StudentResult]:
+    """Autograde every student of ``submissions`` into ``out``; write ``out/grades.csv``.
+
+    Returns:
+        One result per student, in name order.
+
+    Raises:
+        CourseError: if nbgrader cannot set the assignments up.
+    """
+    limits = limits or Limits()
+    out = Path(out).resolve()
+    work = out / "work"
+    work.mkdir(parents=True, exist_ok=True)
+    source = Path(source).resolve()
+    names = list(names) if names is not None else assignments(source)
+    students, skipped = find_submissions(Path(submissions), work)
+    folders: Dict[str, Path] = {}
+    notes: Dict[str, List[str]] = {}
+    config = nbgrader_config(root=work, release="release", db=work / "gradebook.db", source=source)
+    config.CourseDirectory.submitted_directory = "submitted"
+    config.CourseDirectory.autograded_directory = "autograded"
+    execute = _sandboxed_execute_class(limits, use_sandbox, folders, notes)
+    config.Autograde.autograde_preprocessors = [
+        execute if getattr(pp, "__name__", "") == "Execute" else pp
+        for pp in _default_autograde_preprocessors()
+    ]
+    api = _api(config)
+    with _GRADEBOOK:
+        for name in names:
+            result = api.generate_assignment(name, force=True)
+            if not result["success"]:
+                raise CourseError(f"nbgrader could not set up {name}:\n{_log_tail(result)}")
+    run = _Run(api, config, work, names, students, folders, notes, max(1, jobs), progress)
+    cwd = Path.cwd()
+    # nbgrader 0.9 sets NBGRADER_EXECUTION around each execution and then restores the value
+    # of the variable named by its *value* ("autograde"; a slip in nbgrader.utils.setenv),
+    # deleting it when that is unset: two threads would delete it under each other. With
+    # both set for the whole run, every restore just writes "autograde" back.
+    before = {key: os.environ.get(key) for key in ("NBGRADER_EXECUTION", "autograde")}
+    os.environ.update(NBGRADER_EXECUTION="autograde", autograde="autograde")
+    try:
+        with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+            results = list(pool.map(run.grade, sorted(students)))
+    finally:
+        os.chdir(cwd)  # nbgrader's converters change directory while they run
+        for key, value in before.items():
+            if value is None:
+                os.environ.pop(key, None)
+            else:
+                os.environ[key] = value
+    _write_csv(out / "grades.csv", results, names, config)
+    (out / "skipped.json").write_text(json.dumps(skipped, indent=2) + "\n")
+    return results
+
+
+@dataclass
+class _Run:
+    """One class's grading: what each thread needs to grade a student."""
+
+    api: Any
+    config: Any
+    work: Path
+    names: List[str]
+    students: Dict[str, Path]
+    folders: Dict[str, Path]
+    notes: Dict[str, List[str]]
+    jobs: int
+    progress: Optional[Callable[[str], None]]
+    started: float = field(default_factory=time.monotonic)
+    done: List[StudentResult] = field(default_factory=list)
+
+    def grade(self, student: str) -> StudentResult:
+        """Autograde every assignment of one student (in a worker thread)."""
+        began = time.monotonic()
+        result = StudentResult(student)
+        for name in self.names:
+            submitted = self.students[student] / name
+            if not (submitted / f"{name}.ipynb").is_file():
+                result.problems.append(f"{name}: no {name}.ipynb in the submission")
+                continue
+            target = self.work / "submitted" / student / name
+            if target.exists():
+                shutil.rmtree(target)
+            shutil.copytree(submitted, target)
+            key = f"{student}/{name}"
+            self.folders[key] = _prepare_folder(self.work, student, name, submitted)
+            with _GRADEBOOK:
+                outcome = self.api.autograde(name, student, force=True, create=True)
+            result.problems += self.notes.get(key, [])
+            if not outcome["success"]:
+                result.problems.append(f"{name}: nbgrader could not grade it ({_why(outcome)})")
+        with _GRADEBOOK:
+            _read_scores(self.config, result, self.names)
+        result.seconds = time.monotonic() - began
+        self.done.append(result)
+        if self.progress is not None:
+            count, total = len(self.done), len(self.students)
+            per_student = (time.monotonic() - self.started) / count
+            failed = sum(1 for item in self.done if item.problems)
+            self.progress(
+                f"{count}/{total} graded ({failed} with problems), "
+                f"about {(total - count) * per_student:.0f} s left"
+            )
+        return result
+
+
+def _default_autograde_preprocessors() -> list:
+    from nbgrader.converters import Autograde
+
+    return list(Autograde.class_traits()["autograde_preprocessors"].default())
+
+
+def _why(outcome: Dict[str, object]) -> str:
+    lines = [line for line in _log_tail(outcome).splitlines() if line.strip()]
+    return lines[-1][:300] if lines else "no log"
+
+
+def _read_scores(config: object, result: StudentResult, names: List[str]) -> None:
+    from nbgrader.api import Gradebook, MissingEntry
+
+    with Gradebook(config.CourseDirectory.db_url) as gradebook:  # type: ignore[attr-defined]
+        for name in names:
+            try:
+                submission = gradebook.find_submission(name, result.student)
+            except MissingEntry:
+                continue
+            for notebook in submission.notebooks:
+                for grade in notebook.grades:
+                    result.cells[(name, grade.name)] = (
+                        float(grade.score),
+                        float(grade.max_score),
+                    )
+
+
+def _write_csv(path: Path, results: List[StudentResult], names: List[str], config: object) -> None:
+    columns = sorted({key for result in results for key in result.cells})
+    with tempfile.NamedTemporaryFile(
+        "w", dir=path.parent, delete=False, newline="", suffix=".tmp"
+    ) as handle:
+        writer = csv.writer(handle)
+        writer.writerow(
+            ["student", "total", "max_total", "driving_score", "problems"]
+            + [f"{assignment}:{grade_id}" for assignment, grade_id in columns]
+        )
+        for result in results:
+            writer.writerow(
+                [
+                    result.student,
+                    f"{result.total:g}",
+                    f"{result.max_total:g}",
+                    "",
+                    " | ".join(result.problems),
+                ]
+                + [f"{result.cells[key][0]:g}" if key in result.cells else "" for key in columns]
+            )
+    Path(handle.name).replace(path)

@@ -1,0 +1,188 @@
+"""The sandbox a student's code runs in while it is graded: bubblewrap, as an unprivileged user.
+
+nbgrader runs student code with the rights of whoever grades. Here every submission's code
+runs instead inside a bubblewrap container (Debian's ``bwrap``) built from scratch:
+
+- it sees only the Python environment and the system's libraries (read-only) and its own
+  folder (``/sandbox``, writable); not the repository (so not ``solutions/``), not the
+  gradebook, not other students' folders, not the instructor's home;
+- it has no network (its own network namespace, with only its own loopback: the kernel's
+  ports cannot collide with another sandbox's, the race plain nbgrader has in parallel);
+- it runs as the unprivileged user ``nobody``, in its own PID namespace, with limits on
+  memory (address space), processes (so a fork bomb stops at the limit) and CPU time, and it
+  dies with the grader.
+
+Wall time is bounded by the caller (per cell by nbgrader's executor, per submission by the
+subprocess timeout here).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence
+
+from duckielib.errors import DuckielibError
+
+__all__ = ["Limits", "SandboxError", "SandboxUnavailable", "check_sandbox", "sandboxed_command"]
+
+#: The unprivileged user and group the code runs as.
+NOBODY = 65534
+#: Where the submission's own folder appears inside the sandbox.
+INSIDE = "/sandbox"
+
+
+class SandboxError(DuckielibError):
+    """Running code in the sandbox failed for a reason of the grader's, not the student's."""
+
+
+class SandboxUnavailable(SandboxError):
+    """bubblewrap is missing or cannot create a sandbox on this machine."""
+
+
+@dataclass(frozen=True)
+class Limits:
+    """What one submission may use.
+
+    Attributes:
+        cell_seconds: wall time of one notebook cell.
+        submission_seconds: wall time of one notebook, all cells and the kernel's start.
+        memory_bytes: address space of each process (a 20 GB allocation fails at once).
+        processes: processes and threads of the sandbox user (a fork bomb stops there).
+        cpu_seconds: CPU time of each process.
+    """
+
+    cell_seconds: int = 60
+    submission_seconds: int = 600
+    memory_bytes: int = 4 * 1024**3
+    processes: int = 256
+    cpu_seconds: int = 900
+
+
+def _readonly_paths() -> List[str]:
+    """What the sandbox sees read-only: the system, the Python installation, the library."""
+    import duckielib
+
+    paths = ["/usr", "/etc", sys.prefix, sys.base_prefix]
+    library = Path(duckielib.__file__).resolve().parent
+    paths += [str(library), str(Path(__file__).resolve().parent)]
+    real_python = Path(sys.executable).resolve().parent.parent
+    paths.append(str(real_python))
+    unique: List[str] = []
+    for path in paths:
+        if path not in unique and Path(path).exists():
+            unique.append(path)
+    return unique
+
+
+def _parents(path: str) -> List[str]:
+    parts = Path(path).parts[1:-1]
+    return ["/" + "/".join(parts[: index + 1]) for index in range(len(parts))]
+
+
+def sandboxed_command(
+    command: Sequence[str], folder: Path, limits: Limits, env: Optional[Dict[str, str]] = None
+) -> List[str]:
+    """The command line that runs ``command`` in a sandbox whose only writable folder is ``folder``.
+
+    ``folder`` must be writable by the user ``nobody`` (the caller owns it over).
+    """
+    bwrap = shutil.which("bwrap")
+    if bwrap is None:
+        raise SandboxUnavailable(
+            "bubblewrap (bwrap) is not installed; install it with `make ros` (Debian: "
+            "apt-get install bubblewrap), or grade without a sandbox with --no-sandbox "
+            "(student code then runs with your rights)."
+        )
+    args = [
+        bwrap,
+        "--unshare-net",
+        "--unshare-pid",
+        "--unshare-ipc",
+        "--unshare-uts",
+        "--unshare-cgroup-try",
+        "--die-with-parent",
+        "--new-session",
+        "--symlink", "usr/lib", "/lib",
+        "--symlink", "usr/lib64", "/lib64",
+        "--symlink", "usr/bin", "/bin",
+        "--symlink", "usr/sbin", "/sbin",
+    ]  # fmt: skip
+    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin"}
+    for path in _readonly_paths():
+        for parent in _parents(path):
+            if parent not in made:
+                args += ["--perms", "0755", "--dir", parent]
+                made.add(parent)
+        args += ["--ro-bind", path, path]
+        made.add(path)
+    args += [
+        "--dev", "/dev",
+        "--proc", "/proc",
+        "--perms", "1777", "--tmpfs", "/tmp",
+        "--bind", str(folder), INSIDE,
+        "--chdir", INSIDE,
+        # Only to become nobody just below; setpriv then drops every capability.
+        "--cap-add", "CAP_SETUID",
+        "--cap-add", "CAP_SETGID",
+        "setpriv",
+        f"--reuid={NOBODY}",
+        f"--regid={NOBODY}",
+        "--clear-groups",
+        "--no-new-privs",
+        "--inh-caps=-all",
+        "--bounding-set=-all",
+        "prlimit",
+        f"--as={limits.memory_bytes}",
+        f"--nproc={limits.processes}",
+        f"--cpu={limits.cpu_seconds}",
+        "--core=0",
+        "--",
+        "env",
+        "-i",
+    ]  # fmt: skip
+    base = {
+        "HOME": "/tmp",
+        "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin",
+        "LANG": "C.UTF-8",
+        "MPLBACKEND": "Agg",
+        "MPLCONFIGDIR": "/tmp/matplotlib",
+        "JUPYTER_RUNTIME_DIR": "/tmp/jupyter",
+        "IPYTHONDIR": "/tmp/ipython",
+        "PYTHONDONTWRITEBYTECODE": "1",
+    }
+    base.update(env or {})
+    args += [f"{key}={value}" for key, value in base.items()]
+    return args + list(command)
+
+
+def check_sandbox() -> None:
+    """Make sure a sandbox can be created here.
+
+    Raises:
+        SandboxUnavailable: saying what is missing and how to install it.
+    """
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as folder:
+        os.chown(folder, NOBODY, NOBODY)
+        command = sandboxed_command(
+            [sys.executable, "-c", "import os; print(os.getuid())"], Path(folder), Limits()
+        )
+        try:
+            result = subprocess.run(
+                command, check=False, capture_output=True, text=True, timeout=60
+            )
+        except (OSError, subprocess.TimeoutExpired) as error:
+            raise SandboxUnavailable(f"bubblewrap could not start a sandbox: {error}.") from None
+    if result.returncode != 0 or result.stdout.strip() != str(NOBODY):
+        raise SandboxUnavailable(
+            "bubblewrap could not start a sandbox here: "
+            + (result.stderr.strip().splitlines() or ["no message"])[-1]
+            + " (grading needs root, or unprivileged user namespaces, and the `setpriv` and "
+            "`prlimit` tools of util-linux)."
+        )
