@@ -112,7 +112,9 @@ def sandboxed_command(
         "--symlink", "usr/bin", "/bin",
         "--symlink", "usr/sbin", "/sbin",
     ]  # fmt: skip
-    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin"}
+    # /tmp first: a Python environment that lives under /tmp is bound on top of it below.
+    args += ["--perms", "1777", "--tmpfs", "/tmp"]
+    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
     for path in _readonly_paths():
         for parent in _parents(path):
             if parent not in made:
@@ -123,7 +125,6 @@ def sandboxed_command(
     args += [
         "--dev", "/dev",
         "--proc", "/proc",
-        "--perms", "1777", "--tmpfs", "/tmp",
         "--bind", str(folder), INSIDE,
         "--chdir", INSIDE,
         # Only to become nobody just below; setpriv then drops every capability.
