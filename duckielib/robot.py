@@ -123,6 +123,7 @@ def mission_main(argv: Optional[List[str]] = None) -> None:
     def on_init() -> None:
         guards.append(SafetyGuard(rospy))
         warm.append(_connect_listeners(rospy, "~state"))
+        _wait_for_clock(rospy)
 
     restore = guarded_init(rospy, on_init)
     try:
@@ -138,6 +139,19 @@ def mission_main(argv: Optional[List[str]] = None) -> None:
     for guard in guards:
         guard.stop("the mission finished")
         guard.close()
+
+
+def _wait_for_clock(rospy: Any) -> None:
+    """On simulated time, wait for the simulator's first ``/clock`` before the mission starts.
+
+    Until then ROS time reads 0 and does not move: a mission that began then would time its
+    first stop from a clock that is not running yet. On a robot (wall-clock time) this returns
+    at once.
+    """
+    import time
+
+    while rospy.get_rostime().is_zero() and not rospy.is_shutdown():
+        time.sleep(0.01)
 
 
 def _connect_listeners(rospy: Any, topic: str, timeout: float = 3.0) -> Any:
