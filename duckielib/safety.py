@@ -140,14 +140,16 @@ class SafetyGuard:
 
     def close(self) -> None:
         """Stop watching (the node is done); the emergency stop is released if held."""
-        self._ended.set()
-        logging.getLogger("rosout").removeHandler(self._errors)
+        self._stop_watching()
         if self.estop_engaged:
             self._set_estop(False)
 
     # -- callbacks -----------------------------------------------------------------------------
     def _on_shutdown(self) -> None:
         self.stop(self._shutdown_reason)
+        self._stop_watching()
+
+    def _stop_watching(self) -> None:
         self._ended.set()
         logging.getLogger("rosout").removeHandler(self._errors)
 

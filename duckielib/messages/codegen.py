@@ -21,9 +21,18 @@ from typing import Any, Callable, Dict, List, Tuple
 from duckielib.errors import MessageError
 from duckielib.rostime import Duration, Time
 
-__all__ = ["make_init", "make_reader", "make_writer"]
+__all__ = [
+    "FLOAT32_MAX",
+    "FLOAT_LETTERS",
+    "INTEGER_LETTERS",
+    "integer_range",
+    "make_init",
+    "make_reader",
+    "make_writer",
+]
 
-_FIXED = {
+#: The ``struct`` letter of each fixed-size primitive type (little-endian, as ROS 1 sends).
+INTEGER_LETTERS = {
     "int8": "b",
     "byte": "b",
     "uint8": "B",
@@ -34,10 +43,22 @@ _FIXED = {
     "uint32": "I",
     "int64": "q",
     "uint64": "Q",
-    "float32": "f",
-    "float64": "d",
-    "bool": "?",
 }
+FLOAT_LETTERS = {"float32": "f", "float64": "d"}
+_FIXED = {**INTEGER_LETTERS, **FLOAT_LETTERS, "bool": "?"}
+#: The largest finite float32.
+FLOAT32_MAX = 3.4028234663852886e38
+
+
+def integer_range(type_name: str) -> Tuple[int, int]:
+    """The smallest and largest value of an integer type (``"uint16"`` -> (0, 65535))."""
+    letter = INTEGER_LETTERS[type_name]
+    bits = struct.calcsize(letter) * 8
+    if letter.isupper():
+        return 0, 2**bits - 1
+    return -(2 ** (bits - 1)), 2 ** (bits - 1) - 1
+
+
 _UINT32 = struct.Struct("<I")
 _NS_PER_S = 1_000_000_000
 
@@ -223,7 +244,6 @@ class _ReaderSource:
         )
 
 
-_FLOAT32_MAX = 3.4028234663852886e38
 _SCALAR_DEFAULTS = {"string": "''", "bool": "False", "float32": "0.0", "float64": "0.0"}
 
 
@@ -238,13 +258,9 @@ def _fast_test(base_type: str, value: str) -> str:
         return f"type({value}) is float"
     if base_type == "float32":
         return f"type({value}) is float and -_F32 <= {value} <= _F32"
-    letter = _FIXED.get(base_type, "?")
-    if letter == "?":
+    if base_type not in INTEGER_LETTERS:
         return ""
-    bits = struct.calcsize(letter) * 8
-    low, high = (0, 2**bits - 1)
-    if not letter.isupper():
-        low, high = -(2 ** (bits - 1)), 2 ** (bits - 1) - 1
+    low, high = integer_range(base_type)
     return f"type({value}) is int and {low} <= {value} <= {high}"
 
 
@@ -257,7 +273,7 @@ def make_init(message_class: type, generic: Callable[..., None]) -> Callable[...
         "_set": object.__setattr__,
         "_generic": generic,
         "_fields": frozenset(message_class._codecs),
-        "_F32": _FLOAT32_MAX,
+        "_F32": FLOAT32_MAX,
         "_name": message_class.__name__,
         "_Time": Time,
         "_Duration": Duration,

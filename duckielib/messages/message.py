@@ -24,25 +24,19 @@ from typing import Any, Callable, ClassVar, Dict, List, Tuple
 from duckielib.errors import MessageError
 from duckielib.rostime import Duration, Time
 
-from .codegen import make_init, make_reader, make_writer
+from .codegen import (
+    FLOAT32_MAX,
+    FLOAT_LETTERS,
+    INTEGER_LETTERS,
+    integer_range,
+    make_init,
+    make_reader,
+    make_writer,
+)
 from .spec import Field, MessageSpec
 
 __all__ = ["Message", "Service", "make_message_class", "make_service_class"]
 
-_INTEGER_FORMATS = {
-    "int8": "b",
-    "byte": "b",
-    "uint8": "B",
-    "char": "B",
-    "int16": "h",
-    "uint16": "H",
-    "int32": "i",
-    "uint32": "I",
-    "int64": "q",
-    "uint64": "Q",
-}
-_FLOAT_FORMATS = {"float32": "f", "float64": "d"}
-_FLOAT32_MAX = 3.4028234663852886e38
 _BYTE_TYPES = ("uint8", "char")
 _UINT32 = struct.Struct("<I")
 _TIME = struct.Struct("<II")
@@ -51,13 +45,6 @@ _SHORT_ARRAY = 16
 #: What packing a field with a value of the wrong type or size raises.
 _WRITE_ERRORS = (struct.error, TypeError, ValueError, OverflowError, AttributeError)
 _set = object.__setattr__
-
-
-def _integer_range(type_name: str) -> Tuple[int, int]:
-    bits = struct.calcsize(_INTEGER_FORMATS[type_name]) * 8
-    if _INTEGER_FORMATS[type_name].isupper():
-        return 0, 2**bits - 1
-    return -(2 ** (bits - 1)), 2 ** (bits - 1) - 1
 
 
 class _Codec:
@@ -96,8 +83,8 @@ def _is_bool(value: Any) -> bool:
 
 
 def _integer_codec(type_name: str) -> _Codec:
-    low, high = _integer_range(type_name)
-    packer = struct.Struct("<" + _INTEGER_FORMATS[type_name])
+    low, high = integer_range(type_name)
+    packer = struct.Struct("<" + INTEGER_LETTERS[type_name])
 
     def check(value: Any) -> bool:
         if type(value) is int:  # the common case, without the slower ABC check
@@ -114,8 +101,8 @@ def _integer_codec(type_name: str) -> _Codec:
 
 
 def _float_codec(type_name: str) -> _Codec:
-    packer = struct.Struct("<" + _FLOAT_FORMATS[type_name])
-    limit = _FLOAT32_MAX if type_name == "float32" else math.inf
+    packer = struct.Struct("<" + FLOAT_LETTERS[type_name])
+    limit = FLOAT32_MAX if type_name == "float32" else math.inf
 
     def check(value: Any) -> bool:
         return _is_real(value) and not (math.isfinite(value) and abs(value) > limit)
@@ -193,9 +180,9 @@ def _message_codec(message_class: type) -> _Codec:
 
 
 def _primitive_codec(type_name: str) -> _Codec:
-    if type_name in _INTEGER_FORMATS:
+    if type_name in INTEGER_LETTERS:
         return _integer_codec(type_name)
-    if type_name in _FLOAT_FORMATS:
+    if type_name in FLOAT_LETTERS:
         return _float_codec(type_name)
     if type_name == "bool":
         return _bool_codec()

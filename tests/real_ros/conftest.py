@@ -142,6 +142,15 @@ class Master:
     rate = RATE
     stop = staticmethod(_stop)
 
+    @staticmethod
+    def wait_for_bag(bag: Path, timeout: float = 20) -> Path:
+        """Wait until a recorder has closed ``bag`` (rosbag renames NAME.bag.active to NAME.bag)."""
+        deadline = time.monotonic() + timeout
+        while not bag.exists() or bag.with_name(bag.name + ".active").exists():
+            assert time.monotonic() < deadline, f"no closed bag {bag.name} after {timeout:g} s"
+            time.sleep(0.1)
+        return bag
+
     def log(self, name: str) -> str:
         return (self.folder / f"{name}.log").read_text(errors="replace")
 

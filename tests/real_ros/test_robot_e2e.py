@@ -54,11 +54,7 @@ def mission_run(master):
         pytest.fail("the mission did not end in 150 s:\n" + master.log("roslaunch")[-3000:])
     finally:
         master.stop(recorder)
-    # rosbag's recorder renames NAME.bag.active to NAME.bag once it has closed the bag.
-    deadline = time.monotonic() + 20
-    while not bag.exists() or bag.with_name(bag.name + ".active").exists():
-        assert time.monotonic() < deadline, "rosbag record did not close the bag in 20 s"
-        time.sleep(0.1)
+    master.wait_for_bag(bag)
     return bag, time.monotonic() - started, master.log("roslaunch")
 
 
@@ -96,12 +92,8 @@ def test_rosbag_record_has_the_pose_and_matches_the_in_process_run(mission_run, 
 
 
 def test_the_launch_file_records_the_run_as_on_the_robot(mission_run, master):
-    path = master.folder / "robot_side.bag"
-    deadline = time.monotonic() + 20  # roslaunch stops its recorder as the launch ends
-    while not path.exists():
-        assert time.monotonic() < deadline, "course.launch's recorder left no bag"
-        time.sleep(0.1)
-    robot_side = Bag(path)
+    # roslaunch stops course.launch's recorder as the launch ends.
+    robot_side = Bag(master.wait_for_bag(master.folder / "robot_side.bag"))
     for topic in ("odometry_node/pose", "left_wheel_encoder_node/tick", "mission_node/state"):
         assert robot_side.topics[VEH + topic].count > 0, topic
     announced = [item.message.data for item in robot_side.read(VEH + "mission_node/state")]

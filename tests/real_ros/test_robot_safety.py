@@ -103,11 +103,7 @@ def _drive(master, tmp_path: Path, ending: str, mute: str = "") -> Tuple[Bag, in
         master.stop(node)
         master.stop(robot)
         master.stop(recorder)
-    deadline = time.monotonic() + 20
-    while not bag.exists() or bag.with_name(bag.name + ".active").exists():
-        assert time.monotonic() < deadline, "rosbag record did not close the bag"
-        time.sleep(0.1)
-    return Bag(bag), status
+    return Bag(master.wait_for_bag(bag)), status
 
 
 def _truth(bag: Bag) -> List[Tuple[float, float, float]]:
