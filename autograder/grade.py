@@ -32,6 +32,9 @@ from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
+from autograder.driving import Driving, drive
+from autograder.execute import METADATA_KEY, mark_not_run
+from autograder.feedback import failure_messages, write_feedback
 from autograder.sandbox import NOBODY, Limits, sandboxed_command
 
 __all__ = ["StudentResult", "grade_class", "find_submissions"]
@@ -48,12 +51,16 @@ class StudentResult:
         student: the student's id (their folder's name).
         cells: ``(assignment, grade_id) -> (score, max_score)``.
         problems: one sentence each: what went wrong while grading (not failed tests).
+        messages: ``(assignment, grade_id) -> message`` of each failed test.
+        driving: the driving score, or None when the mission was not driven.
         seconds: wall-clock seconds spent on this student.
     """
 
     student: str
     cells: Dict[Tuple[str, str], Tuple[float, float]] = field(default_factory=dict)
     problems: List[str] = field(default_factory=list)
+    messages: Dict[Tuple[str, str], str] = field(default_factory=dict)
+    driving: Optional[Driving] = None
     seconds: float = 0.0
 
     @property
@@ -136,14 +143,15 @@ def _sandboxed_execute_class(
             finally:
                 _GRADEBOOK.acquire()
             if problem is not None:
-                from autograder.execute import mark_not_run
-
                 mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
                 notes.setdefault(key, []).append(
                     f"{resources['nbgrader']['assignment']}: the notebook {problem}"
                 )
                 return nb, resources
             executed = nbformat.reads(output, as_version=4)
+            found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
+            assignment = resources["nbgrader"]["assignment"]
+            notes.setdefault(key, []).extend(f"{assignment}: {problem}" for problem in found)
             return executed, resources
 
     return SandboxedExecute
@@ -169,8 +177,23 @@ def grade_class(
     names: Optional[List[str]] = None,
     source: Path = ROOT / "solutions",
     progress: Optional[Callable[[str], None]] = None,
+    driving: bool = True,
 ) -> List[StudentResult]:
-    """Autograde every student of ``submissions`` into ``out``; write ``out/grades.csv``.
+    """Autograde every student of ``submissions`` into ``out``.
+
+    Writes ``out/grades.csv`` (one row per student), ``out/feedback/STUDENT.html`` and
+    ``out/skipped.json`` (what in ``submissions`` was not a student's folder).
+
+    Args:
+        submissions: one folder (or ``.zip``) per student, or nbgrader's ``submitted/`` layout.
+        out: the results' folder; its ``work/`` holds the gradebook and nbgrader's trees.
+        jobs: how many students are graded at once.
+        limits: what each submission may use (default :class:`Limits`).
+        use_sandbox: whether student code runs in the sandbox (off: with your rights).
+        names: the assignments to grade (default: all of ``source``).
+        source: the course source, whose hidden tests are run.
+        progress: called with one line after each student.
+        driving: whether each student's export drives the mission (the driving score).
 
     Returns:
         One result per student, in name order.
@@ -201,7 +224,9 @@ def grade_class(
             result = api.generate_assignment(name, force=True)
             if not result["success"]:
                 raise CourseError(f"nbgrader could not set up {name}:\n{_log_tail(result)}")
-    run = _Run(api, config, work, names, students, folders, notes, max(1, jobs), progress)
+    (out / "feedback").mkdir(exist_ok=True)
+    run = _Run(api, config, out, names, students, folders, notes, max(1, jobs), progress)
+    run.limits, run.use_sandbox, run.driving = limits, use_sandbox, driving
     cwd = Path.cwd()
     # nbgrader 0.9 sets NBGRADER_EXECUTION around each execution and then restores the value
     # of the variable named by its *value* ("autograde"; a slip in nbgrader.utils.setenv),
@@ -230,15 +255,23 @@ class _Run:
 
     api: Any
     config: Any
-    work: Path
+    out: Path
     names: List[str]
     students: Dict[str, Path]
     folders: Dict[str, Path]
     notes: Dict[str, List[str]]
     jobs: int
     progress: Optional[Callable[[str], None]]
+    limits: Limits = field(default_factory=Limits)
+    use_sandbox: bool = True
+    driving: bool = True
     started: float = field(default_factory=time.monotonic)
     done: List[StudentResult] = field(default_factory=list)
+
+    @property
+    def work(self) -> Path:
+        """The nbgrader course root: the gradebook, ``submitted/`` and ``autograded/``."""
+        return self.out / "work"
 
     def grade(self, student: str) -> StudentResult:
         """Autograde every assignment of one student (in a worker thread)."""
@@ -260,8 +293,15 @@ class _Run:
             result.problems += self.notes.get(key, [])
             if not outcome["success"]:
                 result.problems.append(f"{name}: nbgrader could not grade it ({_why(outcome)})")
+            graded = self.work / "autograded" / student / name / f"{name}.ipynb"
+            for grade_id, message in failure_messages(graded).items():
+                result.messages[(name, grade_id)] = message
         with _GRADEBOOK:
             _read_scores(self.config, result, self.names)
+        if self.driving:
+            box = self.work / "sandboxes" / student / "mission"
+            result.driving = drive(self.students[student], box, self.limits, self.use_sandbox)
+        write_feedback(self.out / "feedback" / f"{student}.html", result, self.names)
         result.seconds = time.monotonic() - began
         self.done.append(result)
         if self.progress is not None:
@@ -287,20 +327,21 @@ def _why(outcome: Dict[str, object]) -> str:
 
 
 def _read_scores(config: object, result: StudentResult, names: List[str]) -> None:
+    """The student's scores from the gradebook; a test never graded scores 0 of its points."""
     from nbgrader.api import Gradebook, MissingEntry
 
     with Gradebook(config.CourseDirectory.db_url) as gradebook:  # type: ignore[attr-defined]
         for name in names:
+            for notebook in gradebook.find_assignment(name).notebooks:
+                for cell in notebook.grade_cells:
+                    result.cells[(name, cell.name)] = (0.0, float(cell.max_score))
             try:
                 submission = gradebook.find_submission(name, result.student)
             except MissingEntry:
                 continue
             for notebook in submission.notebooks:
                 for grade in notebook.grades:
-                    result.cells[(name, grade.name)] = (
-                        float(grade.score),
-                        float(grade.max_score),
-                    )
+                    result.cells[(name, grade.name)] = (float(grade.score), float(grade.max_score))
 
 
 def _write_csv(path: Path, results: List[StudentResult], names: List[str], config: object) -> None:
@@ -310,17 +351,19 @@ def _write_csv(path: Path, results: List[StudentResult], names: List[str], confi
     ) as handle:
         writer = csv.writer(handle)
         writer.writerow(
-            ["student", "total", "max_total", "driving_score", "problems"]
+            ["student", "total", "max_total", "driving_score", "problems", "driving_problems"]
             + [f"{assignment}:{grade_id}" for assignment, grade_id in columns]
         )
         for result in results:
+            driving = result.driving
             writer.writerow(
                 [
                     result.student,
                     f"{result.total:g}",
                     f"{result.max_total:g}",
-                    "",
+                    "" if driving is None else f"{driving.score:g}",
                     " | ".join(result.problems),
+                    "" if driving is None else " | ".join(driving.reasons),
                 ]
                 + [f"{result.cells[key][0]:g}" if key in result.cells else "" for key in columns]
             )

@@ -54,6 +54,7 @@ class Limits:
         memory_bytes: address space of each process (a 20 GB allocation fails at once).
         processes: processes and threads of the sandbox user (a fork bomb stops there).
         cpu_seconds: CPU time of each process.
+        mission_seconds: wall time of the driving run (the mission on the virtual Duckiebot).
     """
 
     cell_seconds: int = 60
@@ -61,6 +62,7 @@ class Limits:
     memory_bytes: int = 4 * 1024**3
     processes: int = 256
     cpu_seconds: int = 900
+    mission_seconds: int = 180
 
 
 def _readonly_paths() -> List[str]:

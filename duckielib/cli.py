@@ -208,11 +208,12 @@ def _grade(args: argparse.Namespace) -> int:
         use_sandbox=not args.no_sandbox,
         names=args.assignment or None,
         progress=lambda line: print(line, flush=True),
+        driving=not args.no_driving,
     )
     troubled = [result for result in results if result.problems]
     print(
         f"graded {len(results)} students ({len(troubled)} with problems): "
-        f"{Path(args.out) / 'grades.csv'}"
+        f"{Path(args.out) / 'grades.csv'}, feedback pages in {Path(args.out) / 'feedback'}/"
     )
     return 0
 
@@ -227,6 +228,11 @@ def _add_grade(commands: argparse._SubParsersAction) -> None:
     grade.add_argument("--jobs", type=int, default=1, help="students graded at once")
     grade.add_argument(
         "--assignment", action="append", help="grade only this assignment (repeatable)"
+    )
+    grade.add_argument(
+        "--no-driving",
+        action="store_true",
+        help="skip the driving score (each student's code driving the mission)",
     )
     grade.add_argument(
         "--no-sandbox",

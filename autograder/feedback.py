@@ -1,0 +1,184 @@
+"""Per-student feedback: one self-contained HTML page a student learns from.
+
+For each test of each notebook the page shows the points and, when it failed, the message the
+test gave (the assertion's sentence, or the error's name and text). Hidden tests' code is never
+shown: only their messages, which the instructor wrote for students. The driving part shows
+the mission's score, what went wrong, the states the robot went through and its trajectory.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from pathlib import Path
+from typing import TYPE_CHECKING, Dict, List, Optional, Tuple
+
+from autograder.driving import MAX_SCORE, POINTS
+
+if TYPE_CHECKING:  # pragma: no cover - types only
+    from autograder.grade import StudentResult
+
+__all__ = ["failure_messages", "write_feedback"]
+
+#: The longest message shown for one test, in characters.
+MESSAGE_LIMIT = 600
+
+_STYLE = """
+body { font-family: system-ui, sans-serif; max-width: 60rem; margin: 2rem auto; padding: 0 1rem;
+       color: #1d1d1f; line-height: 1.45; }
+h1 { font-size: 1.6rem; } h2 { margin-top: 2rem; border-bottom: 1px solid #ddd; }
+table { border-collapse: collapse; width: 100%; margin: 0.5rem 0 1rem; }
+th, td { text-align: left; padding: 0.3rem 0.6rem; border-bottom: 1px solid #eee;
+         vertical-align: top; }
+.pass { color: #1a7f37; } .fail { color: #b3261e; }
+pre { white-space: pre-wrap; margin: 0; font-size: 0.9rem; }
+.note { background: #fff4e5; padding: 0.5rem 0.8rem; border-radius: 4px; }
+img { max-width: 100%; border: 1px solid #ddd; }
+"""
+
+
+def failure_messages(notebook_path: Path) -> Dict[str, str]:
+    """The message of each failed test cell of an autograded notebook, by ``grade_id``.
+
+    Only the error's name and text are kept, never its traceback (which would quote the
+    hidden tests' code).
+    """
+    import nbformat
+
+    try:
+        notebook = nbformat.read(notebook_path, as_version=4)
+    except Exception:  # an unreadable notebook has no messages to show
+        return {}
+    messages: Dict[str, str] = {}
+    for cell in notebook.cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if cell.cell_type != "code" or not meta.get("grade") or not meta.get("grade_id"):
+            continue
+        errors = [out for out in cell.get("outputs", []) if out.get("output_type") == "error"]
+        if errors:
+            error = errors[-1]
+            name, value = str(error.get("ename", "Error")), str(error.get("evalue", ""))
+            text = value if name in ("AssertionError", "NotRun") and value else f"{name}: {value}"
+            messages[meta["grade_id"]] = _shorten(text or name)
+    return messages
+
+
+def _shorten(text: str) -> str:
+    return text if len(text) <= MESSAGE_LIMIT else text[: MESSAGE_LIMIT - 1] + "…"
+
+
+def _e(value: object) -> str:
+    return html.escape(str(value))
+
+
+def _tests_section(result: StudentResult, names: List[str]) -> List[str]:
+    parts: List[str] = []
+    for name in names:
+        cells = [(key[1], value) for key, value in result.cells.items() if key[0] == name]
+        if not cells:
+            continue
+        score = sum(value[0] for _, value in cells)
+        most = sum(value[1] for _, value in cells)
+        parts.append(f"<h2>{_e(name)}: {score:g} / {most:g}</h2>")
+        parts.append("<table><tr><th>Test</th><th>Points</th><th>Result</th></tr>")
+        for grade_id, (got, out_of) in cells:
+            message = result.messages.get((name, grade_id))
+            if got >= out_of:
+                verdict = '<span class="pass">passed</span>'
+            else:
+                shown = message or "Some checks did not pass."
+                verdict = f'<span class="fail">failed</span><pre>{_e(shown)}</pre>'
+            parts.append(
+                f"<tr><td>{_e(grade_id)}</td><td>{got:g} / {out_of:g}</td><td>{verdict}</td></tr>"
+            )
+        parts.append("</table>")
+    return parts
+
+
+def _driving_section(result: StudentResult) -> List[str]:
+    driving = result.driving
+    if driving is None:
+        return []
+    parts = [f"<h2>Driving the mission: {driving.score:g} / {MAX_SCORE:g}</h2>"]
+    labels = {
+        "bag": "a readable bag with the mission's states",
+        "states": "the states and LED colours in order",
+        "stops": "every stop held for its time, standing still",
+        "closure": "the robot ended near its start",
+    }
+    parts.append("<table><tr><th>Check</th><th>Points</th></tr>")
+    for key, most in POINTS.items():
+        got = driving.parts.get(key, 0.0)
+        parts.append(f"<tr><td>{_e(labels[key])}</td><td>{got:g} / {most:g}</td></tr>")
+    parts.append("</table>")
+    if driving.reasons:
+        items = "".join(f"<li>{_e(reason)}</li>" for reason in driving.reasons)
+        parts.append(f'<div class="note"><ul>{items}</ul></div>')
+    summary = driving.summary or {}
+    if summary.get("states"):
+        parts.append(
+            "<table><tr><th>State</th><th>LED colour</th><th>Start (s)</th><th>End (s)</th>"
+            "<th>Moved (m)</th></tr>"
+        )
+        for state in summary["states"]:
+            parts.append(
+                "<tr>"
+                + "".join(
+                    f"<td>{_e(state.get(key))}</td>"
+                    for key in ("name", "color", "start", "end", "moved")
+                )
+                + "</tr>"
+            )
+        parts.append("</table>")
+        facts = [
+            ("Total time (s)", summary.get("total_time")),
+            ("Final pose by odometry [x, y, theta]", summary.get("final_pose_odometry")),
+            ("Final pose, ground truth [x, y, theta]", summary.get("final_pose_truth")),
+            ("Distance from the start at the end (m)", summary.get("distance_to_start")),
+        ]
+        parts.append("<table>")
+        parts += [f"<tr><th>{_e(label)}</th><td>{_e(value)}</td></tr>" for label, value in facts]
+        parts.append("</table>")
+    if driving.figure is not None:
+        data = base64.b64encode(driving.figure).decode("ascii")
+        parts.append(f'<img alt="The robot\'s path" src="data:image/png;base64,{data}">')
+    return parts
+
+
+def write_feedback(
+    path: Path, result: StudentResult, names: List[str], title: Optional[str] = None
+) -> Path:
+    """Write the feedback page of one student to ``path``.
+
+    Args:
+        path: the HTML file to write (its folder must exist).
+        result: the student's grading.
+        names: the assignments, in course order.
+        title: the page's title (default: "Feedback for STUDENT").
+    """
+    heading = title or f"Feedback for {result.student}"
+    total: Tuple[float, float] = (result.total, result.max_total)
+    parts = [
+        "<!DOCTYPE html>",
+        '<html lang="en"><head><meta charset="utf-8">',
+        f"<title>{_e(heading)}</title><style>{_STYLE}</style></head><body>",
+        f"<h1>{_e(heading)}</h1>",
+        f"<p>Tests: <strong>{total[0]:g} / {total[1]:g}</strong> points.",
+    ]
+    if result.driving is not None:
+        parts.append(f" Driving: <strong>{result.driving.score:g} / {MAX_SCORE:g}</strong>.")
+    parts.append(
+        "</p><p>Each failed test shows the message it gave. Some tests are hidden: you see "
+        "their message, not their code. Run your notebook again, read the message, and "
+        "compare what your function returns with what the message expected.</p>"
+    )
+    if result.problems:
+        items = "".join(f"<li>{_e(problem)}</li>" for problem in result.problems)
+        parts.append(f'<div class="note"><p>While grading:</p><ul>{items}</ul></div>')
+    parts += _tests_section(result, names)
+    parts += _driving_section(result)
+    parts.append("</body></html>\n")
+    partial = path.with_name(path.name + ".partial")
+    partial.write_text("\n".join(parts), encoding="utf-8")
+    partial.replace(path)
+    return path

@@ -1,0 +1,124 @@
+"""The adversarial submissions: what a student might hand in, on purpose or by accident.
+
+Each case is notebook 03_frames filled with the reference answers (full marks, 9 points) and
+then changed: a cell inserted (after the cell it names), answers replaced, or the file itself
+broken. ``{paths}`` in a cell's code is filled in with the grader's own paths at test time, so
+a case can try to reach them. What an instructor wants from each case is asserted in
+``test_adversarial.py``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, Optional, Tuple
+
+#: The assignment the cases are built on, and its points.
+ASSIGNMENT = "03_frames"
+FULL_MARKS = 9.0
+
+
+@dataclass(frozen=True)
+class Case:
+    """One adversarial submission.
+
+    Attributes:
+        cell: code inserted as a new cell.
+        after: the ``grade_id`` of the cell it goes after (None: after the imports cell).
+        answers: ``grade_id -> code`` replacing the reference answers.
+        raw: the notebook file's whole text instead of a notebook (a malformed file).
+        empty: the student's folder is empty.
+    """
+
+    cell: Optional[str] = None
+    after: Optional[str] = None
+    answers: Dict[str, str] = field(default_factory=dict)
+    raw: Optional[str] = None
+    empty: bool = False
+
+
+_TRY_READ = """\
+import os
+readable = []
+for path in {paths}:
+    try:
+        if os.path.isdir(path):
+            os.listdir(path)
+        else:
+            open(path, "rb").read(16)
+        readable.append(path)
+    except OSError:
+        pass
+print("readable:", readable)
+"""
+
+_TRY_WRITE = """\
+import os
+written = []
+for folder in {paths} + ["/etc", "/usr", os.path.dirname(os.__file__)]:
+    try:
+        with open(os.path.join(folder, "pwned.txt"), "w") as handle:
+            handle.write("pwned")
+        written.append(folder)
+    except OSError:
+        pass
+print("written:", written)
+"""
+
+_PATCH_HELPERS = """\
+import math
+import numpy
+import numpy.testing
+
+math.isclose = lambda *args, **kwargs: True
+numpy.allclose = lambda *args, **kwargs: True
+numpy.testing.assert_allclose = lambda *args, **kwargs: None
+
+
+class _Anything:
+    def __getattr__(self, name):
+        return lambda *args, **kwargs: True
+
+
+np = _Anything()
+get_ipython().set_custom_exc((Exception,), lambda *args, **kwargs: None)
+"""
+
+CASES: Dict[str, Case] = {
+    "reference": Case(),
+    "infinite_loop": Case(cell="while True:\n    pass\n"),
+    "sys_exit": Case(cell="import sys\n\nsys.exit(1)\n"),
+    "os_exit": Case(cell="import os\n\nos._exit(0)\n", after="test_wrap_angle"),
+    "kernel_crash": Case(cell="import ctypes\n\nctypes.string_at(0)\n"),
+    "memory_20gb": Case(cell="block = bytearray(20 * 1024**3)\n"),
+    "fork_bomb": Case(cell="import os\n\nwhile True:\n    os.fork()\n"),
+    "network": Case(
+        cell="import socket\n\nsocket.create_connection(('pypi.org', 443), timeout=5)\n"
+    ),
+    "read_outside": Case(cell=_TRY_READ),
+    "write_outside": Case(cell=_TRY_WRITE),
+    "monkey_patch": Case(
+        cell=_PATCH_HELPERS,
+        after="world_from_start",
+        answers={
+            "wrap_angle": "def wrap_angle(theta):\n    return 0.0\n",
+            "rotation_matrix": "def rotation_matrix(theta):\n    return [[1, 0], [0, 1]]\n",
+        },
+    ),
+    "stderr": Case(
+        cell="import sys\nimport warnings\n\nprint('a message on stderr', file=sys.stderr)\n"
+        "warnings.warn('a warning')\n"
+    ),
+    "malformed": Case(raw='{"cells": [ this is not a notebook'),
+    "empty": Case(empty=True),
+}
+
+
+def expected_loss(name: str) -> Tuple[str, ...]:
+    """The tests a case must fail (every other test scores full marks), or ``("*",)``: all."""
+    return {
+        "os_exit": ("test_rotation_matrix", "test_world_from_robot", "test_world_from_start"),
+        "kernel_crash": ("*",),
+        "monkey_patch": ("test_wrap_angle", "test_rotation_matrix"),
+        "malformed": ("*",),
+        "empty": ("*",),
+    }.get(name, ())

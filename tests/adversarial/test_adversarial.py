@@ -1,0 +1,203 @@
+"""Adversarial submissions graded in one class, in parallel, next to a well-behaved student.
+
+For each case of ``cases.py``: the outcome an instructor wants (the points it should keep or
+lose, the problem reported), every other student graded normally, and the gradebook intact.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import sqlite3
+from pathlib import Path
+
+import nbformat
+import pytest
+from cases import ASSIGNMENT, CASES, FULL_MARKS, expected_loss
+
+from autograder.course import ROOT
+from autograder.grade import grade_class
+from autograder.sandbox import Limits, check_sandbox
+
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]
+
+MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
+
+
+def filled_notebook():
+    """The released notebook with every answer cell holding the reference code."""
+    reference = nbformat.read(ROOT / "solutions" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
+    answers = {
+        cell.metadata["nbgrader"]["grade_id"]: "\n".join(
+            line for line in cell.source.splitlines() if line.strip() not in MARKERS
+        )
+        for cell in reference.cells
+        if cell.get("metadata", {}).get("nbgrader", {}).get("solution")
+    }
+    notebook = nbformat.read(ROOT / "course" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
+    for cell in notebook.cells:
+        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+        if grade_id in answers:
+            cell.source = answers[grade_id]
+    return notebook
+
+
+def _grade_id(cell) -> str:
+    return cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
+
+
+def build(folder, name, case, paths):
+    """Write student ``name``'s submission of ``case`` into ``folder/name``."""
+    target = folder / name / ASSIGNMENT
+    if case.empty:
+        (folder / name).mkdir(parents=True)
+        return
+    shutil.copytree(ROOT / "course" / ASSIGNMENT, target, ignore=shutil.ignore_patterns("*.ipynb"))
+    path = target / f"{ASSIGNMENT}.ipynb"
+    if case.raw is not None:
+        path.write_text(case.raw, encoding="utf-8")
+        return
+    notebook = filled_notebook()
+    for cell in notebook.cells:
+        if _grade_id(cell) in case.answers:
+            cell.source = case.answers[_grade_id(cell)]
+    if case.cell is not None:
+        code = case.cell.replace("{paths}", repr(paths))
+        if case.after is None:
+            index = next(i for i, cell in enumerate(notebook.cells) if cell.cell_type == "code")
+        else:
+            index = next(
+                i for i, cell in enumerate(notebook.cells) if _grade_id(cell) == case.after
+            )
+        notebook.cells.insert(index + 1, nbformat.v4.new_code_cell(code))
+    nbformat.write(notebook, path)
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    if shutil.which("bwrap") is None:
+        pytest.skip("bubblewrap is not installed; run `make ros`.")
+    check_sandbox()
+    root = tmp_path_factory.mktemp("adversarial")
+    submissions, out = root / "submissions", root / "out"
+    # What a submission must not reach: the gradebook and the grader's work, the course
+    # source with the hidden tests, another student's submission and sandbox.
+    # (The environment is there read-only: /etc, and the library under the repository's path.)
+    paths = [
+        str(out / "work" / "gradebook.db"),
+        str(out / "work"),
+        str(ROOT / "solutions"),
+        str(ROOT / "course"),
+        str(submissions / "reference"),
+        str(out / "work" / "sandboxes" / "reference" / ASSIGNMENT),
+    ]
+    for name, case in CASES.items():
+        build(submissions, name, case, paths)
+    results = grade_class(
+        submissions,
+        out,
+        jobs=2,
+        limits=Limits(cell_seconds=5, submission_seconds=90, processes=64),
+        names=[ASSIGNMENT],
+        driving=False,
+    )
+    return {result.student: result for result in results}, out, paths
+
+
+def _scores(result):
+    return {grade_id: score for (_, grade_id), (score, _) in result.cells.items()}
+
+
+def _outputs(out, student):
+    path = out / "work" / "autograded" / student / ASSIGNMENT / f"{ASSIGNMENT}.ipynb"
+    notebook = nbformat.read(path, 4)
+    return [
+        output
+        for cell in notebook.cells
+        if cell.cell_type == "code"
+        for output in cell.get("outputs", [])
+    ]
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_each_case_keeps_what_it_earned_and_loses_what_it_did_not(graded, name):
+    results, _, _ = graded
+    result = results[name]
+    assert result.max_total == FULL_MARKS, f"{name}: every student is graded out of the same"
+    lost = expected_loss(name)
+    scores = _scores(result)
+    assert set(scores) == set(_scores(results["reference"]))
+    for grade_id, score in scores.items():
+        wanted_zero = lost == ("*",) or grade_id in lost
+        assert (score == 0) if wanted_zero else (score > 0), (name, grade_id, score)
+
+
+def test_a_well_behaved_student_in_the_same_class_gets_full_marks(graded):
+    results, _, _ = graded
+    assert results["reference"].total == FULL_MARKS
+    assert results["reference"].problems == []
+
+
+@pytest.mark.parametrize(
+    ("name", "words"),
+    [
+        ("os_exit", "the kernel died"),
+        ("kernel_crash", "the kernel died"),
+        ("monkey_patch", "math.isclose"),
+        ("malformed", "not a readable notebook"),
+        ("empty", "no 03_frames.ipynb"),
+    ],
+)
+def test_the_instructor_is_told_what_happened(graded, name, words):
+    results, _, _ = graded
+    assert any(words in problem for problem in results[name].problems), results[name].problems
+
+
+def test_the_monkey_patches_were_undone_before_the_tests(graded):
+    results, _, _ = graded
+    (problem,) = [p for p in results["monkey_patch"].problems if "replaced" in p]
+    for name in ("math.isclose", "numpy.allclose", "numpy.testing.assert_allclose", "the name np"):
+        assert name in problem
+    assert "IPython custom exception handler" in problem
+
+
+def test_nothing_outside_the_sandbox_can_be_read_or_written(graded):
+    _, out, paths = graded
+    printed = "".join(
+        output.get("text", "")
+        for case in ("read_outside", "write_outside")
+        for output in _outputs(out, case)
+        if output.get("output_type") == "stream"
+    )
+    assert "readable: []" in printed
+    assert "written: []" in printed
+    for path in [*paths, ROOT, "/etc"]:
+        assert not (Path(path) / "pwned.txt").exists(), path
+
+
+def test_the_network_is_unreachable_and_stderr_is_harmless(graded):
+    results, out, _ = graded
+    errors = [o for o in _outputs(out, "network") if o.get("output_type") == "error"]
+    assert [error["ename"] for error in errors][:1] in (["gaierror"], ["OSError"])
+    assert results["stderr"].total == FULL_MARKS
+    assert any(o.get("name") == "stderr" for o in _outputs(out, "stderr"))
+
+
+def test_the_gradebook_is_intact_and_holds_every_grade(graded):
+    results, out, _ = graded
+    database = out / "work" / "gradebook.db"
+    with sqlite3.connect(database) as connection:
+        assert connection.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{database}") as gradebook:
+        graded_students = {
+            submission.student.id for submission in gradebook.assignment_submissions(ASSIGNMENT)
+        }
+        for name in graded_students:
+            submission = gradebook.find_submission(ASSIGNMENT, name)
+            assert submission.score == results[name].total, name
+    assert graded_students >= set(CASES) - {"empty"}
+    rows = (out / "grades.csv").read_text().splitlines()
+    assert len(rows) == 1 + len(CASES)
+    assert json.loads((out / "skipped.json").read_text()) == []
