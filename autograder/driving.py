@@ -73,7 +73,8 @@ def drive(
     """Export the student's notebooks, run the mission in a sandbox on ``folder``, score it.
 
     Args:
-        notebooks: the student's folder of assignment notebooks (a copy of ``course/``).
+        notebooks: the student's folder of assignment notebooks (a copy of ``course/``), or
+            a ``.py`` solution made by ``duckie export``.
         folder: an empty folder the run may write (owned over to the sandbox's user here).
         limits: the sandbox's limits; the mission has ``limits.mission_seconds`` of wall time.
         use_sandbox: whether to run in the sandbox (off only with ``duckie grade --no-sandbox``).
@@ -85,14 +86,17 @@ def drive(
     from duckielib.errors import DuckielibError
     from duckielib.solution import export_solution
 
-    try:
-        export = export_solution(notebooks, strict=False)
-    except DuckielibError as error:
-        return Driving(reasons=[f"Your notebooks could not be exported: {error}"])
+    if notebooks.is_file():  # a module made by duckie export
+        text = notebooks.read_text(encoding="utf-8")
+    else:
+        try:
+            text = export_solution(notebooks, strict=False).source
+        except DuckielibError as error:
+            return Driving(reasons=[f"Your notebooks could not be exported: {error}"])
     if folder.exists():
         shutil.rmtree(folder)
     folder.mkdir(parents=True)
-    (folder / "solution.py").write_text(export.source, encoding="utf-8")
+    (folder / "solution.py").write_text(text, encoding="utf-8")
     for path in [folder, *folder.rglob("*")]:
         shutil.chown(path, NOBODY, NOBODY)
     command = [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "solution.py"]

@@ -58,7 +58,14 @@ def failure_messages(notebook_path: Path) -> Dict[str, str]:
         if errors:
             error = errors[-1]
             name, value = str(error.get("ename", "Error")), str(error.get("evalue", ""))
-            text = value if name in ("AssertionError", "NotRun") and value else f"{name}: {value}"
+            if name == "NotImplementedError":
+                text = (
+                    "A function this test calls is not written yet (it raises NotImplementedError)."
+                )
+            elif name in ("AssertionError", "NotRun") and value:
+                text = value
+            else:
+                text = f"{name}: {value}" if value else name
             messages[meta["grade_id"]] = _shorten(text or name)
     return messages
 

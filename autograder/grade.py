@@ -31,11 +31,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
+import nbformat
+
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
 from autograder.driving import Driving, drive
 from autograder.execute import METADATA_KEY, mark_not_run
 from autograder.feedback import failure_messages, write_feedback
 from autograder.sandbox import NOBODY, Limits, sandboxed_command
+from autograder.tamper import repair
 
 __all__ = ["StudentResult", "grade_class", "find_submissions"]
 
@@ -158,13 +161,22 @@ def _sandboxed_execute_class(
 
 
 def _prepare_folder(work: Path, student: str, assignment: str, source: Path) -> Path:
-    """The writable folder a student's notebook runs in: a copy of their assignment files."""
+    """The writable folder a student's notebook runs in: a copy of their assignment files.
+
+    Symbolic links are left out: one pointing outside would hand the sandbox a file of the
+    grader's (copied, or given to ``nobody``).
+    """
     folder = work / "sandboxes" / student / assignment
     if folder.exists():
         shutil.rmtree(folder)
-    shutil.copytree(source, folder, ignore=shutil.ignore_patterns("*.ipynb", ".*"))
+
+    def ignored(directory: str, names: List[str]) -> List[str]:
+        links = [name for name in names if (Path(directory) / name).is_symlink()]
+        return [*links, *shutil.ignore_patterns("*.ipynb", ".*")(directory, names)]
+
+    shutil.copytree(source, folder, ignore=ignored)
     for path in [folder, *folder.rglob("*")]:
-        os.chown(path, NOBODY, NOBODY)
+        os.chown(path, NOBODY, NOBODY, follow_symlinks=False)
     return folder
 
 
@@ -285,7 +297,17 @@ class _Run:
             target = self.work / "submitted" / student / name
             if target.exists():
                 shutil.rmtree(target)
-            shutil.copytree(submitted, target)
+            shutil.copytree(submitted, target, symlinks=True)
+            # Graded on the instructor's cells: deleted, duplicated or renamed ones put back,
+            # an unreadable notebook replaced by the release (see autograder.tamper).
+            handed_in = submitted / f"{name}.ipynb"
+            release = self.work / "release" / name / f"{name}.ipynb"
+            if handed_in.is_symlink():  # never read a file of the grader's in its place
+                result.problems.append(f"{name}: the notebook is a link; the release was graded")
+                handed_in = release
+            notebook, found = repair(handed_in, release)
+            nbformat.write(notebook, target / f"{name}.ipynb")
+            result.problems += found
             key = f"{student}/{name}"
             self.folders[key] = _prepare_folder(self.work, student, name, submitted)
             with _GRADEBOOK:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import html
 import json
 import os
 import shutil
@@ -144,6 +145,26 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
     assert rows["ada"]["max_total"] == rows["ben"]["max_total"]
     assert {"driving_score", "problems", f"{ASSIGNMENT}:test_wrap_angle"} <= set(rows["ada"])
     assert json.loads((tmp_path / "out" / "skipped.json").read_text()) == []
+    # Only 03_frames was handed in: the export lacks the mission's parts, so no driving score.
+    assert rows["ada"]["driving_score"] == "0"
+    assert rows["ada"]["driving_problems"].startswith("The mission could not run:")
+    # Feedback: one page each, with the failed tests' messages and never a hidden test's code.
+    pages = {name: (tmp_path / "out" / "feedback" / f"{name}.html").read_text() for name in rows}
+    assert "CellTimeoutError" in pages["cy"]
+    assert "is not written yet" in pages["ben"]
+    assert pages["ada"].count(">passed<") == 4
+    assert ">failed<" not in pages["ada"]
+    reference = nbformat.read(ROOT / "solutions" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
+    hidden = [
+        line.strip()
+        for cell in reference.cells
+        for region in cell.source.split("### BEGIN HIDDEN TESTS")[1:]
+        for line in region.split("### END HIDDEN TESTS")[0].splitlines()
+        if len(line.strip()) > 20
+    ]
+    assert len(hidden) > 20
+    for page in pages.values():
+        assert not [line for line in hidden if html.escape(line) in page]
 
 
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):

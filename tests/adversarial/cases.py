@@ -27,6 +27,7 @@ class Case:
         answers: ``grade_id -> code`` replacing the reference answers.
         raw: the notebook file's whole text instead of a notebook (a malformed file).
         empty: the student's folder is empty.
+        link: a symbolic link of that name is put in the folder, pointing at the gradebook.
     """
 
     cell: Optional[str] = None
@@ -34,6 +35,7 @@ class Case:
     answers: Dict[str, str] = field(default_factory=dict)
     raw: Optional[str] = None
     empty: bool = False
+    link: Optional[str] = None
 
 
 _TRY_READ = """\
@@ -96,6 +98,7 @@ CASES: Dict[str, Case] = {
     ),
     "read_outside": Case(cell=_TRY_READ),
     "write_outside": Case(cell=_TRY_WRITE),
+    "symlink_out": Case(cell=_TRY_READ.replace("{paths}", "['gradebook.db']"), link="gradebook.db"),
     "monkey_patch": Case(
         cell=_PATCH_HELPERS,
         after="world_from_start",

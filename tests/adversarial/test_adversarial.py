@@ -54,6 +54,8 @@ def build(folder, name, case, paths):
         return
     shutil.copytree(ROOT / "course" / ASSIGNMENT, target, ignore=shutil.ignore_patterns("*.ipynb"))
     path = target / f"{ASSIGNMENT}.ipynb"
+    if case.link is not None:
+        (target / case.link).symlink_to(paths[0])
     if case.raw is not None:
         path.write_text(case.raw, encoding="utf-8")
         return
@@ -165,11 +167,11 @@ def test_nothing_outside_the_sandbox_can_be_read_or_written(graded):
     _, out, paths = graded
     printed = "".join(
         output.get("text", "")
-        for case in ("read_outside", "write_outside")
+        for case in ("read_outside", "write_outside", "symlink_out")
         for output in _outputs(out, case)
         if output.get("output_type") == "stream"
     )
-    assert "readable: []" in printed
+    assert printed.count("readable: []") == 2
     assert "written: []" in printed
     for path in [*paths, ROOT, "/etc"]:
         assert not (Path(path) / "pwned.txt").exists(), path
