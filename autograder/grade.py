@@ -113,7 +113,10 @@ def _has_assignment(folder: Path) -> bool:
 
 
 def _sandboxed_execute_class(
-    limits: Limits, use_sandbox: bool, folders: Dict[str, Path], notes: Dict[str, List[str]]
+    limits: Limits,
+    use_sandbox: bool,
+    folders: Dict[str, Tuple[Path, Path]],
+    notes: Dict[str, List[str]],
 ):
     """The class that takes the place of nbgrader's Execute: the notebook runs in the sandbox."""
     import nbformat
@@ -122,10 +125,10 @@ def _sandboxed_execute_class(
     class SandboxedExecute(Execute):
         def preprocess(self, nb, resources):
             key = f"{resources['nbgrader']['student']}/{resources['nbgrader']['assignment']}"
-            folder = folders[key]
+            folder, view = folders[key]
             command = [sys.executable, str(_EXECUTE), str(limits.cell_seconds)]
             if use_sandbox:
-                command = sandboxed_command(command, folder, limits)
+                command = sandboxed_command(command, folder, limits, course=view)
             text = nbformat.writes(nb)
             _GRADEBOOK.release()  # others may use the gradebook while this notebook runs
             try:
@@ -160,22 +163,26 @@ def _sandboxed_execute_class(
     return SandboxedExecute
 
 
-def _prepare_folder(work: Path, student: str, assignment: str, source: Path) -> Path:
-    """The writable folder a student's notebook runs in: a copy of their assignment files.
+def _prepare_folder(work: Path, student: str, assignment: str, source: Path, notebook) -> Path:
+    """The writable folder a student's notebook runs in: their assignment's files.
 
-    Symbolic links are left out: one pointing outside would hand the sandbox a file of the
-    grader's (copied, or given to ``nobody``).
+    It holds the student's data files and their (repaired) notebook, which notebooks that load
+    their neighbours read from ``..``. Left out: symbolic links (one pointing outside would
+    hand the sandbox a file of the grader's) and Python modules (a ``numpy.py`` next to the
+    notebook would stand in for numpy in the tests).
     """
     folder = work / "sandboxes" / student / assignment
     if folder.exists():
         shutil.rmtree(folder)
+    skipped = shutil.ignore_patterns("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
 
     def ignored(directory: str, names: List[str]) -> List[str]:
         links = [name for name in names if (Path(directory) / name).is_symlink()]
-        return [*links, *shutil.ignore_patterns("*.ipynb", ".*")(directory, names)]
+        return [*links, *skipped(directory, names)]
 
     shutil.copytree(source, folder, ignore=ignored)
-    for path in [folder, *folder.rglob("*")]:
+    nbformat.write(notebook, folder / f"{assignment}.ipynb")
+    for path in [folder.parent, folder, *folder.rglob("*")]:
         os.chown(path, NOBODY, NOBODY, follow_symlinks=False)
     return folder
 
@@ -220,7 +227,7 @@ def grade_class(
     source = Path(source).resolve()
     names = list(names) if names is not None else assignments(source)
     students, skipped = find_submissions(Path(submissions), work)
-    folders: Dict[str, Path] = {}
+    folders: Dict[str, Tuple[Path, Path]] = {}
     notes: Dict[str, List[str]] = {}
     config = nbgrader_config(root=work, release="release", db=work / "gradebook.db", source=source)
     config.CourseDirectory.submitted_directory = "submitted"
@@ -270,7 +277,7 @@ class _Run:
     out: Path
     names: List[str]
     students: Dict[str, Path]
-    folders: Dict[str, Path]
+    folders: Dict[str, Tuple[Path, Path]]
     notes: Dict[str, List[str]]
     jobs: int
     progress: Optional[Callable[[str], None]]
@@ -285,31 +292,42 @@ class _Run:
         """The nbgrader course root: the gradebook, ``submitted/`` and ``autograded/``."""
         return self.out / "work"
 
+    def _hand_in(self, student: str, name: str, result: StudentResult) -> bool:
+        """Put one assignment, repaired, where nbgrader grades it and where it runs.
+
+        Returns:
+            Whether the student handed it in.
+        """
+        submitted = self.students[student] / name
+        handed_in = submitted / f"{name}.ipynb"
+        if not (handed_in.is_file() or handed_in.is_symlink()):
+            result.problems.append(f"{name}: no {name}.ipynb in the submission")
+            return False
+        target = self.work / "submitted" / student / name
+        if target.exists():
+            shutil.rmtree(target)
+        shutil.copytree(submitted, target, symlinks=True)
+        # Graded on the instructor's cells: deleted, duplicated or renamed ones put back,
+        # an unreadable notebook replaced by the release (see autograder.tamper).
+        release = self.work / "release" / name / f"{name}.ipynb"
+        if handed_in.is_symlink():  # never read a file of the grader's in its place
+            result.problems.append(f"{name}: the notebook is a link; the release was graded")
+            handed_in = release
+        notebook, found = repair(handed_in, release)
+        result.problems += found
+        nbformat.write(notebook, target / f"{name}.ipynb")
+        _prepare_folder(self.work, student, name, submitted, notebook)
+        return True
+
     def grade(self, student: str) -> StudentResult:
         """Autograde every assignment of one student (in a worker thread)."""
         began = time.monotonic()
         result = StudentResult(student)
-        for name in self.names:
-            submitted = self.students[student] / name
-            if not (submitted / f"{name}.ipynb").is_file():
-                result.problems.append(f"{name}: no {name}.ipynb in the submission")
-                continue
-            target = self.work / "submitted" / student / name
-            if target.exists():
-                shutil.rmtree(target)
-            shutil.copytree(submitted, target, symlinks=True)
-            # Graded on the instructor's cells: deleted, duplicated or renamed ones put back,
-            # an unreadable notebook replaced by the release (see autograder.tamper).
-            handed_in = submitted / f"{name}.ipynb"
-            release = self.work / "release" / name / f"{name}.ipynb"
-            if handed_in.is_symlink():  # never read a file of the grader's in its place
-                result.problems.append(f"{name}: the notebook is a link; the release was graded")
-                handed_in = release
-            notebook, found = repair(handed_in, release)
-            nbformat.write(notebook, target / f"{name}.ipynb")
-            result.problems += found
+        view = self.work / "sandboxes" / student
+        handed_in = [name for name in self.names if self._hand_in(student, name, result)]
+        for name in handed_in:
             key = f"{student}/{name}"
-            self.folders[key] = _prepare_folder(self.work, student, name, submitted)
+            self.folders[key] = (view / name, view)
             with _GRADEBOOK:
                 outcome = self.api.autograde(name, student, force=True, create=True)
             result.problems += self.notes.get(key, [])

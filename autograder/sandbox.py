@@ -34,6 +34,8 @@ __all__ = ["Limits", "SandboxError", "SandboxUnavailable", "check_sandbox", "san
 NOBODY = 65534
 #: Where the submission's own folder appears inside the sandbox.
 INSIDE = "/sandbox"
+#: Where the student's notebooks appear (read-only) when a notebook needs its neighbours.
+COURSE = "/course"
 
 
 class SandboxError(DuckielibError):
@@ -87,11 +89,24 @@ def _parents(path: str) -> List[str]:
 
 
 def sandboxed_command(
-    command: Sequence[str], folder: Path, limits: Limits, env: Optional[Dict[str, str]] = None
+    command: Sequence[str],
+    folder: Path,
+    limits: Limits,
+    env: Optional[Dict[str, str]] = None,
+    course: Optional[Path] = None,
 ) -> List[str]:
     """The command line that runs ``command`` in a sandbox whose only writable folder is ``folder``.
 
-    ``folder`` must be writable by the user ``nobody`` (the caller owns it over).
+    Args:
+        command: what to run, inside the sandbox.
+        folder: the writable folder, the command's working directory (``/sandbox``); it must
+            be writable by the user ``nobody`` (the caller owns it over).
+        limits: what the sandbox may use.
+        env: environment variables besides the sandbox's own.
+        course: the folder of the student's assignment folders (``NAME/NAME.ipynb``), shown
+            read-only at ``/course`` with ``folder`` writable at ``/course/NAME`` (``NAME`` is
+            ``folder``'s name), so a notebook can load the student's other notebooks from
+            ``..`` as it does in JupyterLab.
     """
     bwrap = shutil.which("bwrap")
     if bwrap is None:
@@ -127,8 +142,13 @@ def sandboxed_command(
     args += [
         "--dev", "/dev",
         "--proc", "/proc",
-        "--bind", str(folder), INSIDE,
-        "--chdir", INSIDE,
+    ]  # fmt: skip
+    inside = INSIDE if course is None else f"{COURSE}/{Path(folder).name}"
+    if course is not None:
+        args += ["--ro-bind", str(course), COURSE]
+    args += [
+        "--bind", str(folder), inside,
+        "--chdir", inside,
         # Only to become nobody just below; setpriv then drops every capability.
         "--cap-add", "CAP_SETUID",
         "--cap-add", "CAP_SETGID",

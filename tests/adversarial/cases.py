@@ -28,6 +28,7 @@ class Case:
         raw: the notebook file's whole text instead of a notebook (a malformed file).
         empty: the student's folder is empty.
         link: a symbolic link of that name is put in the folder, pointing at the gradebook.
+        files: other files put next to the notebook, ``name -> text``.
     """
 
     cell: Optional[str] = None
@@ -36,6 +37,7 @@ class Case:
     raw: Optional[str] = None
     empty: bool = False
     link: Optional[str] = None
+    files: Dict[str, str] = field(default_factory=dict)
 
 
 _TRY_READ = """\
@@ -107,6 +109,14 @@ CASES: Dict[str, Case] = {
             "rotation_matrix": "def rotation_matrix(theta):\n    return [[1, 0], [0, 1]]\n",
         },
     ),
+    "shadow_numpy": Case(
+        files={"numpy.py": "def allclose(*args, **kwargs):\n    return True\n"},
+        answers={
+            "rotation_matrix": (
+                "import numpy as np\n\n\ndef rotation_matrix(theta):\n    return np.eye(2)\n"
+            )
+        },
+    ),
     "stderr": Case(
         cell="import sys\nimport warnings\n\nprint('a message on stderr', file=sys.stderr)\n"
         "warnings.warn('a warning')\n"
@@ -122,6 +132,7 @@ def expected_loss(name: str) -> Tuple[str, ...]:
         "os_exit": ("test_rotation_matrix", "test_world_from_robot", "test_world_from_start"),
         "kernel_crash": ("*",),
         "monkey_patch": ("test_wrap_angle", "test_rotation_matrix"),
+        "shadow_numpy": ("test_rotation_matrix",),
         "malformed": ("*",),
         "empty": ("*",),
     }.get(name, ())

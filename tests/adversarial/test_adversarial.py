@@ -54,6 +54,8 @@ def build(folder, name, case, paths):
         return
     shutil.copytree(ROOT / "course" / ASSIGNMENT, target, ignore=shutil.ignore_patterns("*.ipynb"))
     path = target / f"{ASSIGNMENT}.ipynb"
+    for file_name, text in case.files.items():
+        (target / file_name).write_text(text, encoding="utf-8")
     if case.link is not None:
         (target / case.link).symlink_to(paths[0])
     if case.raw is not None:

@@ -1,0 +1,252 @@
+"""Benchmark: grading a class, plain sequential nbgrader against the sandboxed parallel grader.
+
+Every submission is a realistic one of the whole course: the released ``course/`` with every
+graded answer cell filled with the reference code of ``solutions/``, as a student who solved
+everything would hand it in (see :func:`filled_course`). ``N`` copies of it (environment
+variable ``DUCKIE_BENCH_GRADE_N``, default 4) are graded three times, each run in a tmp folder
+of its own:
+
+- ``nbgrader_sequential_s_per_submission``: :func:`autograder.course.autograde`, plain
+  ``NbGraderAPI.autograde`` one submission after the other, no sandbox;
+- ``grade_jobs1_s_per_submission``: :func:`autograder.grade.grade_class` with the sandbox, one
+  student at a time;
+- ``grade_jobs2_s_per_submission``: the same with two students at a time.
+
+The grader's driving score is left out (``driving=False``): plain nbgrader has no such step,
+and the figures compare the grading of the same notebooks.
+
+Each figure is wall-clock seconds per submission. Every copy must score full marks in every
+graded cell in all three runs (``all_full_marks``), since timing a broken grading means
+nothing. The headline, last, is the grader's throughput with two jobs against plain
+sequential nbgrader (``grade_speedup_vs_nbgrader``).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+import time
+import warnings
+from pathlib import Path
+from typing import Dict, Iterable, List, Mapping, Optional, Set, Tuple
+
+from autograder.course import ROOT, CourseError, assignments
+
+__all__ = ["N", "check_full_marks", "filled_course", "reference_answers", "run"]
+
+#: How many copies of the filled course each run grades.
+N = int(os.environ.get("DUCKIE_BENCH_GRADE_N", "4"))
+
+_MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
+
+Cells = Mapping[Tuple[str, str], Tuple[float, float]]
+
+
+def _notebook(folder: Path, name: str) -> Path:
+    return folder / name / f"{name}.ipynb"
+
+
+def _text(cell: dict) -> str:
+    text = cell.get("source", "")
+    return "".join(text) if isinstance(text, list) else text
+
+
+def _grade_id(cell: dict) -> Optional[str]:
+    return cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+
+
+def reference_answers(source: Path = ROOT / "solutions") -> Dict[Tuple[str, str], str]:
+    """The reference code of every graded answer cell, as a student would type it.
+
+    Args:
+        source: the course source (nbgrader source notebooks, one folder per assignment).
+
+    Returns:
+        ``(assignment, grade_id) -> cell source``, without the solution region's markers.
+    """
+    answers = {}
+    for name in assignments(source):
+        notebook = json.loads(_notebook(Path(source), name).read_text(encoding="utf-8"))
+        for cell in notebook["cells"]:
+            marks = cell.get("metadata", {}).get("nbgrader", {})
+            if marks.get("solution") and not marks.get("grade"):
+                lines = _text(cell).splitlines()
+                kept = [line for line in lines if line.strip() not in _MARKERS]
+                answers[(name, marks["grade_id"])] = "\n".join(kept) + "\n"
+    return answers
+
+
+def filled_course(
+    folder: Path, release: Path = ROOT / "course", source: Path = ROOT / "solutions"
+) -> Path:
+    """Write a copy of the release into ``folder`` with every graded answer cell solved.
+
+    Args:
+        folder: where the copy goes (must not exist yet).
+        release: the released student notebooks.
+        source: the course source whose reference code fills the answer cells.
+
+    Returns:
+        ``folder``, which then holds one folder per assignment, as a student hands it in.
+    """
+    folder = Path(folder)
+    shutil.copytree(release, folder)
+    answers = reference_answers(source)
+    for name in assignments(release):
+        path = _notebook(folder, name)
+        notebook = json.loads(path.read_text(encoding="utf-8"))
+        for cell in notebook["cells"]:
+            answer = answers.get((name, _grade_id(cell)))
+            if answer is not None:
+                cell["source"] = answer
+        path.write_text(json.dumps(notebook, indent=1) + "\n", encoding="utf-8")
+    return folder
+
+
+def check_full_marks(
+    run_name: str,
+    student: str,
+    cells: Cells,
+    expected: Set[Tuple[str, str]],
+    problems: Iterable[str] = (),
+) -> None:
+    """Make sure a filled course scored every point of every graded cell.
+
+    Args:
+        run_name: the grading run, for the message (``"nbgrader"``, ...).
+        student: the copy's student id.
+        cells: ``(assignment, grade_id) -> (score, max_score)`` as the run gave them.
+        expected: every ``(assignment, grade_id)`` that must have a score.
+        problems: what went wrong while grading, one sentence each (none expected).
+
+    Raises:
+        CourseError: naming the student and the first cell that is missing or short of marks.
+    """
+    problems = list(problems)
+    if problems:
+        raise CourseError(f"{run_name} had problems grading {student}: {'; '.join(problems)}.")
+    missing = sorted(set(expected) - set(cells))
+    if missing:
+        assignment, grade_id = missing[0]
+        raise CourseError(
+            f"{run_name} gave {student} no score for {assignment} {grade_id}"
+            f"{_and_more(len(missing) - 1)}, where every graded cell should have one."
+        )
+    short = [(key, value) for key, value in sorted(cells.items()) if value[0] != value[1]]
+    if short:
+        (assignment, grade_id), (score, most) = short[0]
+        raise CourseError(
+            f"{run_name} gave {student} {score:g} of {most:g} in {assignment} {grade_id}"
+            f"{_and_more(len(short) - 1)}, where the reference code scores full marks."
+        )
+
+
+def _and_more(count: int) -> str:
+    """`` (and 3 more cells)``, or nothing when there are none."""
+    if count == 0:
+        return ""
+    return f" (and {count} more {'cell' if count == 1 else 'cells'})"
+
+
+def _expected_cells(source: Path, names: List[str]) -> Set[Tuple[str, str]]:
+    """Every autograded test cell of ``names``: ``(assignment, grade_id)``."""
+    expected = set()
+    for name in names:
+        notebook = json.loads(_notebook(source, name).read_text(encoding="utf-8"))
+        for cell in notebook["cells"]:
+            marks = cell.get("metadata", {}).get("nbgrader", {})
+            if marks.get("grade"):
+                expected.add((name, marks["grade_id"]))
+    return expected
+
+
+def run(
+    names: Optional[List[str]] = None,
+    copies: Optional[int] = None,
+    source: Path = ROOT / "solutions",
+) -> List[Tuple[str, str]]:
+    """Grade ``copies`` filled courses three ways; return the figures, headline last.
+
+    Args:
+        names: the assignments to grade (default: all of the course). Later notebooks load
+            the student's earlier ones from the folder above their own (``load_solution("..")``),
+            so a subset must hold the assignments its notebooks build on.
+        copies: how many submissions (default: :data:`N`).
+        source: the course source.
+
+    Returns:
+        ``(name, value)`` pairs: seconds per submission of each run, the full-marks check and
+        the speed-up of the two-job grader over plain sequential nbgrader.
+
+    Raises:
+        CourseError: if a copy does not get full marks in a run, naming the student and cell.
+    """
+    from autograder.course import autograde
+    from autograder.grade import grade_class
+
+    source = Path(source).resolve()
+    names = list(names) if names is not None else assignments(source)
+    copies = N if copies is None else copies
+    if copies < 1:
+        raise CourseError(f"The benchmark needs at least one submission, not {copies}.")
+    expected = _expected_cells(source, names)
+    import nbgrader.apps  # noqa: F401 - imported once here, so no run pays for it
+    from sqlalchemy.exc import SAWarning
+
+    with warnings.catch_warnings(), tempfile.TemporaryDirectory(
+        prefix="duckie-bench-grade-"
+    ) as tmp:
+        # nbgrader's own gradebook code warns about its session on every autograde.
+        warnings.filterwarnings("ignore", category=SAWarning)
+        tmp_path = Path(tmp)
+        submissions = tmp_path / "submissions"
+        filled_course(submissions / "student_1", source=source)
+        students = [f"student_{index}" for index in range(1, copies + 1)]
+        for student in students[1:]:
+            shutil.copytree(submissions / students[0], submissions / student)
+
+        started = time.perf_counter()
+        plain = autograde(
+            {student: submissions / student for student in students},
+            tmp_path / "nbgrader",
+            names=names,
+            source=source,
+        )
+        nbgrader_s = time.perf_counter() - started
+        for student, scores in plain.items():
+            check_full_marks("nbgrader", student, scores.cells, expected)
+
+        grader_s = {}
+        for jobs in (1, 2):
+            started = time.perf_counter()
+            results = grade_class(
+                submissions,
+                tmp_path / f"grade_jobs{jobs}",
+                jobs=jobs,
+                names=names,
+                source=source,
+                driving=False,
+            )
+            grader_s[jobs] = time.perf_counter() - started
+            for result in results:
+                check_full_marks(
+                    f"grade_class with {jobs} jobs",
+                    result.student,
+                    result.cells,
+                    expected,
+                    result.problems,
+                )
+            if {result.student for result in results} != set(students):
+                raise CourseError(f"grade_class with {jobs} jobs did not grade every copy.")
+
+    return [
+        ("submissions", str(copies)),
+        ("notebooks_per_submission", str(len(names))),
+        ("nbgrader_sequential_s_per_submission", f"{nbgrader_s / copies:.1f}"),
+        ("grade_jobs1_s_per_submission", f"{grader_s[1] / copies:.1f}"),
+        ("grade_jobs2_s_per_submission", f"{grader_s[2] / copies:.1f}"),
+        ("all_full_marks", "yes"),
+        ("grade_speedup_vs_nbgrader", f"{nbgrader_s / grader_s[2]:.2f}"),
+    ]
