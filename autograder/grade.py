@@ -238,14 +238,17 @@ def grade_class(
         for pp in _default_autograde_preprocessors()
     ]
     api = _api(config)
+    # The driving score exports the whole course: every notebook is then repaired and laid out.
+    course = sorted(set(assignments(source)) | set(names)) if driving else list(names)
     with _GRADEBOOK:
-        for name in names:
+        for name in course:
             result = api.generate_assignment(name, force=True)
             if not result["success"]:
                 raise CourseError(f"nbgrader could not set up {name}:\n{_log_tail(result)}")
     (out / "feedback").mkdir(exist_ok=True)
     run = _Run(api, config, out, names, students, folders, notes, max(1, jobs), progress)
     run.limits, run.use_sandbox, run.driving = limits, use_sandbox, driving
+    run.course = course
     cwd = Path.cwd()
     # nbgrader 0.9 sets NBGRADER_EXECUTION around each execution and then restores the value
     # of the variable named by its *value* ("autograde"; a slip in nbgrader.utils.setenv),
@@ -284,6 +287,7 @@ class _Run:
     limits: Limits = field(default_factory=Limits)
     use_sandbox: bool = True
     driving: bool = True
+    course: List[str] = field(default_factory=list)
     started: float = field(default_factory=time.monotonic)
     done: List[StudentResult] = field(default_factory=list)
 
@@ -324,7 +328,15 @@ class _Run:
         began = time.monotonic()
         result = StudentResult(student)
         view = self.work / "sandboxes" / student
-        handed_in = [name for name in self.names if self._hand_in(student, name, result)]
+        # Every notebook is repaired and laid out (the driving score exports them all), but
+        # only those graded are reported on.
+        aside = StudentResult(student)
+        handed_in = [
+            name
+            for name in self.course
+            if self._hand_in(student, name, result if name in self.names else aside)
+            and name in self.names
+        ]
         for name in handed_in:
             key = f"{student}/{name}"
             self.folders[key] = (view / name, view)
@@ -339,8 +351,10 @@ class _Run:
         with _GRADEBOOK:
             _read_scores(self.config, result, self.names)
         if self.driving:
-            box = self.work / "sandboxes" / student / "mission"
-            result.driving = drive(self.students[student], box, self.limits, self.use_sandbox)
+            # From the repaired copies: a notebook linked to a file of the grader's (the
+            # reference solutions) is never exported.
+            box = self.work / "driving" / student
+            result.driving = drive(view, box, self.limits, self.use_sandbox)
         write_feedback(self.out / "feedback" / f"{student}.html", result, self.names)
         result.seconds = time.monotonic() - began
         self.done.append(result)

@@ -177,3 +177,17 @@ def test_duckie_grade_refuses_a_missing_folder(tmp_path):
     assert result.returncode == 1
     assert result.stderr.startswith("duckie: There is no folder")
     assert "Traceback" not in result.stderr
+
+
+def test_notebooks_linked_to_the_reference_are_neither_graded_nor_driven(sandbox, tmp_path):
+    student = tmp_path / "submissions" / "eve"
+    for notebook in sorted((ROOT / "solutions").glob("*/*.ipynb")):
+        (student / notebook.parent.name).mkdir(parents=True)
+        (student / notebook.parent.name / notebook.name).symlink_to(notebook)
+    (result,) = grade_class(
+        tmp_path / "submissions", tmp_path / "out", names=[ASSIGNMENT], limits=Limits()
+    )
+    assert result.total == 0
+    assert result.problems == [f"{ASSIGNMENT}: the notebook is a link; the release was graded"]
+    assert result.driving.score == 0
+    assert result.driving.reasons[0].startswith("The mission could not run: Finish notebook")
