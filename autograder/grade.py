@@ -163,6 +163,11 @@ def _sandboxed_execute_class(
     return SandboxedExecute
 
 
+def _links(directory: str, names: List[str]) -> List[str]:
+    """The symbolic links among ``names`` (for ``shutil.copytree``'s ``ignore``)."""
+    return [name for name in names if (Path(directory) / name).is_symlink()]
+
+
 def _prepare_folder(work: Path, student: str, assignment: str, source: Path, notebook) -> Path:
     """The writable folder a student's notebook runs in: their assignment's files.
 
@@ -175,12 +180,9 @@ def _prepare_folder(work: Path, student: str, assignment: str, source: Path, not
     if folder.exists():
         shutil.rmtree(folder)
     skipped = shutil.ignore_patterns("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
-
-    def ignored(directory: str, names: List[str]) -> List[str]:
-        links = [name for name in names if (Path(directory) / name).is_symlink()]
-        return [*links, *skipped(directory, names)]
-
-    shutil.copytree(source, folder, ignore=ignored)
+    shutil.copytree(
+        source, folder, ignore=lambda where, names: [*_links(where, names), *skipped(where, names)]
+    )
     nbformat.write(notebook, folder / f"{assignment}.ipynb")
     for path in [folder.parent, folder, *folder.rglob("*")]:
         os.chown(path, NOBODY, NOBODY, follow_symlinks=False)
@@ -310,7 +312,8 @@ class _Run:
         target = self.work / "submitted" / student / name
         if target.exists():
             shutil.rmtree(target)
-        shutil.copytree(submitted, target, symlinks=True)
+        # Without links: writing the repaired notebook through one would overwrite its target.
+        shutil.copytree(submitted, target, ignore=_links)
         # Graded on the instructor's cells: deleted, duplicated or renamed ones put back,
         # an unreadable notebook replaced by the release (see autograder.tamper).
         release = self.work / "release" / name / f"{name}.ipynb"

@@ -184,9 +184,11 @@ def test_notebooks_linked_to_the_reference_are_neither_graded_nor_driven(sandbox
     for notebook in sorted((ROOT / "solutions").glob("*/*.ipynb")):
         (student / notebook.parent.name).mkdir(parents=True)
         (student / notebook.parent.name / notebook.name).symlink_to(notebook)
+    before = {path: path.read_bytes() for path in (ROOT / "solutions").glob("*/*.ipynb")}
     (result,) = grade_class(
         tmp_path / "submissions", tmp_path / "out", names=[ASSIGNMENT], limits=Limits()
     )
+    assert {path: path.read_bytes() for path in before} == before, "a link was written through"
     assert result.total == 0
     assert result.problems == [f"{ASSIGNMENT}: the notebook is a link; the release was graded"]
     assert result.driving.score == 0
