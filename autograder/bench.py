@@ -32,9 +32,12 @@ import warnings
 from pathlib import Path
 from typing import Dict, Iterable, List, Mapping, Optional, Set, Tuple
 
+import nbformat
+from nbformat import NotebookNode
+
 from autograder.course import ROOT, CourseError, assignments
 
-__all__ = ["N", "check_full_marks", "filled_course", "reference_answers", "run"]
+__all__ = ["N", "check_full_marks", "filled_course", "filled_notebook", "reference_answers", "run"]
 
 #: How many copies of the filled course each run grades.
 N = int(os.environ.get("DUCKIE_BENCH_GRADE_N", "4"))
@@ -57,17 +60,20 @@ def _grade_id(cell: dict) -> Optional[str]:
     return cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
 
 
-def reference_answers(source: Path = ROOT / "solutions") -> Dict[Tuple[str, str], str]:
+def reference_answers(
+    source: Path = ROOT / "solutions", names: Optional[Iterable[str]] = None
+) -> Dict[Tuple[str, str], str]:
     """The reference code of every graded answer cell, as a student would type it.
 
     Args:
         source: the course source (nbgrader source notebooks, one folder per assignment).
+        names: the assignments to read (default: all of ``source``).
 
     Returns:
         ``(assignment, grade_id) -> cell source``, without the solution region's markers.
     """
     answers = {}
-    for name in assignments(source):
+    for name in assignments(source) if names is None else names:
         notebook = json.loads(_notebook(Path(source), name).read_text(encoding="utf-8"))
         for cell in notebook["cells"]:
             marks = cell.get("metadata", {}).get("nbgrader", {})
@@ -76,6 +82,22 @@ def reference_answers(source: Path = ROOT / "solutions") -> Dict[Tuple[str, str]
                 kept = [line for line in lines if line.strip() not in _MARKERS]
                 answers[(name, marks["grade_id"])] = "\n".join(kept) + "\n"
     return answers
+
+
+def filled_notebook(
+    name: str, release: Path = ROOT / "course", source: Path = ROOT / "solutions"
+) -> NotebookNode:
+    """The released notebook of assignment ``name`` with every graded answer cell solved."""
+    notebook = nbformat.read(_notebook(Path(release), name), as_version=4)
+    _fill(notebook, name, reference_answers(source, [name]))
+    return notebook
+
+
+def _fill(notebook: NotebookNode, name: str, answers: Mapping[Tuple[str, str], str]) -> None:
+    for cell in notebook.cells:
+        answer = answers.get((name, _grade_id(cell)))
+        if answer is not None:
+            cell.source = answer
 
 
 def filled_course(
@@ -96,12 +118,9 @@ def filled_course(
     answers = reference_answers(source)
     for name in assignments(release):
         path = _notebook(folder, name)
-        notebook = json.loads(path.read_text(encoding="utf-8"))
-        for cell in notebook["cells"]:
-            answer = answers.get((name, _grade_id(cell)))
-            if answer is not None:
-                cell["source"] = answer
-        path.write_text(json.dumps(notebook, indent=1) + "\n", encoding="utf-8")
+        notebook = nbformat.read(path, as_version=4)
+        _fill(notebook, name, answers)
+        nbformat.write(notebook, path)
     return folder
 
 

@@ -20,7 +20,6 @@ the instructor, like any other cheating.
 
 from __future__ import annotations
 
-import json
 import re
 import shutil
 import subprocess
@@ -29,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional
 
-from autograder.sandbox import NOBODY, Limits, sandboxed_command
+from autograder.sandbox import NOBODY, Limits, run
 
 __all__ = ["MAX_SCORE", "POINTS", "Driving", "drive"]
 
@@ -101,17 +100,14 @@ def drive(
         shutil.chown(path, NOBODY, NOBODY)
     command = [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "solution.py"]
     command += ["--mission", mission, "--out", "run", "--no-animation"]
-    if use_sandbox:
-        command = sandboxed_command(command, folder, limits, env={"VEHICLE_NAME": ROBOT})
     try:
-        result = subprocess.run(
+        result = run(
             command,
-            check=False,
-            capture_output=True,
-            text=True,
-            timeout=limits.mission_seconds,
-            cwd=folder,
-            start_new_session=True,
+            folder,
+            limits,
+            limits.mission_seconds,
+            use_sandbox=use_sandbox,
+            env={"VEHICLE_NAME": ROBOT},
         )
     except subprocess.TimeoutExpired:
         return Driving(
@@ -165,15 +161,3 @@ def score_bag(run: Path, mission: str = "square_then_circle") -> Driving:
         data = figure.read_bytes()
         driving.figure = data if data.startswith(_PNG) else None
     return driving
-
-
-def as_json(driving: Driving) -> str:
-    """The driving score as JSON (without the figure), for the feedback folder."""
-    data = {
-        "score": driving.score,
-        "max_score": MAX_SCORE,
-        "parts": driving.parts,
-        "reasons": driving.reasons,
-        "summary": driving.summary,
-    }
-    return json.dumps(data, indent=2) + "\n"

@@ -57,7 +57,8 @@ def _setup():
     own = [(owner, name, vars(owner).get(name)) for owner in (shell, kernel)
            if owner is not None for _, name in methods]
     methods = [(cls, name, cls.__dict__.get(name)) for cls, name in methods]
-    modules = {"np": numpy, "numpy": numpy, "math": math}
+    names = {"np": numpy, "numpy": numpy, "math": math}
+    modules = {"numpy": numpy, "numpy.testing": numpy.testing, "math": math}
 
     def check():
         changed = []
@@ -79,14 +80,13 @@ def _setup():
         if shell.custom_exceptions:
             shell.set_custom_exc((), None)
             changed.append("IPython custom exception handler")
-        for name, module in modules.items():
+        for name, module in names.items():
             if name in shell.user_ns and shell.user_ns[name] is not module:
                 shell.user_ns[name] = module
                 changed.append(f"the name {name}")
-        for name in ("numpy", "numpy.testing", "math"):
-            real = {"numpy": numpy, "numpy.testing": numpy.testing, "math": math}[name]
-            if sys.modules.get(name) is not real:
-                sys.modules[name] = real
+        for name, module in modules.items():
+            if sys.modules.get(name) is not module:
+                sys.modules[name] = module
                 changed.append(f"sys.modules[{name!r}]")
         return sorted(set(changed))
 

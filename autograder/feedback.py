@@ -11,7 +11,7 @@ from __future__ import annotations
 import base64
 import html
 from pathlib import Path
-from typing import TYPE_CHECKING, Dict, List, Optional, Tuple
+from typing import TYPE_CHECKING, Dict, List
 
 from autograder.driving import MAX_SCORE, POINTS
 
@@ -152,25 +152,21 @@ def _driving_section(result: StudentResult) -> List[str]:
     return parts
 
 
-def write_feedback(
-    path: Path, result: StudentResult, names: List[str], title: Optional[str] = None
-) -> Path:
+def write_feedback(path: Path, result: StudentResult, names: List[str]) -> Path:
     """Write the feedback page of one student to ``path``.
 
     Args:
         path: the HTML file to write (its folder must exist).
         result: the student's grading.
         names: the assignments, in course order.
-        title: the page's title (default: "Feedback for STUDENT").
     """
-    heading = title or f"Feedback for {result.student}"
-    total: Tuple[float, float] = (result.total, result.max_total)
+    heading = f"Feedback for {result.student}"
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',
         f"<title>{_e(heading)}</title><style>{_STYLE}</style></head><body>",
         f"<h1>{_e(heading)}</h1>",
-        f"<p>Tests: <strong>{total[0]:g} / {total[1]:g}</strong> points.",
+        f"<p>Tests: <strong>{result.total:g} / {result.max_total:g}</strong> points.",
     ]
     if result.driving is not None:
         parts.append(f" Driving: <strong>{result.driving.score:g} / {MAX_SCORE:g}</strong>.")

@@ -33,11 +33,12 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import nbformat
 
+from autograder import sandbox
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
 from autograder.driving import Driving, drive
 from autograder.execute import METADATA_KEY, mark_not_run
 from autograder.feedback import failure_messages, write_feedback
-from autograder.sandbox import NOBODY, Limits, sandboxed_command
+from autograder.sandbox import NOBODY, Limits
 from autograder.tamper import repair
 
 __all__ = ["StudentResult", "grade_class", "find_submissions"]
@@ -119,7 +120,6 @@ def _sandboxed_execute_class(
     notes: Dict[str, List[str]],
 ):
     """The class that takes the place of nbgrader's Execute: the notebook runs in the sandbox."""
-    import nbformat
     from nbgrader.preprocessors import Execute
 
     class SandboxedExecute(Execute):
@@ -127,20 +127,17 @@ def _sandboxed_execute_class(
             key = f"{resources['nbgrader']['student']}/{resources['nbgrader']['assignment']}"
             folder, view = folders[key]
             command = [sys.executable, str(_EXECUTE), str(limits.cell_seconds)]
-            if use_sandbox:
-                command = sandboxed_command(command, folder, limits, course=view)
             text = nbformat.writes(nb)
             _GRADEBOOK.release()  # others may use the gradebook while this notebook runs
             try:
-                result = subprocess.run(
+                result = sandbox.run(
                     command,
-                    check=False,
-                    input=text,
-                    capture_output=True,
-                    text=True,
-                    timeout=limits.submission_seconds,
-                    cwd=folder,
-                    start_new_session=True,
+                    folder,
+                    limits,
+                    limits.submission_seconds,
+                    use_sandbox=use_sandbox,
+                    stdin=text,
+                    course=view,
                 )
                 output = result.stdout
                 problem = None if output.strip() else (result.stderr.strip()[-500:] or "no output")
@@ -268,7 +265,7 @@ def grade_class(
                 os.environ.pop(key, None)
             else:
                 os.environ[key] = value
-    _write_csv(out / "grades.csv", results, names, config)
+    _write_csv(out / "grades.csv", results)
     (out / "skipped.json").write_text(json.dumps(skipped, indent=2) + "\n")
     return results
 
@@ -401,7 +398,7 @@ def _read_scores(config: object, result: StudentResult, names: List[str]) -> Non
                     result.cells[(name, grade.name)] = (float(grade.score), float(grade.max_score))
 
 
-def _write_csv(path: Path, results: List[StudentResult], names: List[str], config: object) -> None:
+def _write_csv(path: Path, results: List[StudentResult]) -> None:
     columns = sorted({key for result in results for key in result.cells})
     with tempfile.NamedTemporaryFile(
         "w", dir=path.parent, delete=False, newline="", suffix=".tmp"

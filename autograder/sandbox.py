@@ -28,7 +28,14 @@ from typing import Dict, List, Optional, Sequence
 
 from duckielib.errors import DuckielibError
 
-__all__ = ["Limits", "SandboxError", "SandboxUnavailable", "check_sandbox", "sandboxed_command"]
+__all__ = [
+    "Limits",
+    "SandboxError",
+    "SandboxUnavailable",
+    "check_sandbox",
+    "run",
+    "sandboxed_command",
+]
 
 #: The unprivileged user and group the code runs as.
 NOBODY = 65534
@@ -181,6 +188,52 @@ def sandboxed_command(
     base.update(env or {})
     args += [f"{key}={value}" for key, value in base.items()]
     return args + list(command)
+
+
+def run(
+    command: Sequence[str],
+    folder: Path,
+    limits: Limits,
+    timeout: float,
+    use_sandbox: bool = True,
+    stdin: Optional[str] = None,
+    env: Optional[Dict[str, str]] = None,
+    course: Optional[Path] = None,
+) -> subprocess.CompletedProcess:
+    """Run ``command`` in ``folder``, in the sandbox (see :func:`sandboxed_command`) unless told.
+
+    Args:
+        command: what to run.
+        folder: the writable working folder.
+        limits: what the sandbox may use.
+        timeout: wall-clock seconds before the command is killed.
+        use_sandbox: whether to use the sandbox (off: the command runs with your rights).
+        stdin: text sent on the command's standard input.
+        env: environment variables besides the sandbox's own (or the grader's, without it).
+        course: the student's assignment folders, shown at ``/course`` (sandbox only).
+
+    Returns:
+        The finished process, its output captured as text.
+
+    Raises:
+        subprocess.TimeoutExpired: if it ran longer than ``timeout``.
+    """
+    environment = None
+    if use_sandbox:
+        command = sandboxed_command(command, folder, limits, env=env, course=course)
+    elif env:
+        environment = {**os.environ, **env}
+    return subprocess.run(
+        list(command),
+        check=False,
+        input=stdin,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        cwd=folder,
+        env=environment,
+        start_new_session=True,
+    )
 
 
 def check_sandbox() -> None:

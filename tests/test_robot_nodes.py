@@ -20,7 +20,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
-from test_purity import BLOCKER, LAPTOP_ONLY, tool
+from test_purity import BLOCKER, LAPTOP_ONLY, vermin_38
 
 from duckielib.errors import DuckielibError
 from duckielib.missions import MISSIONS
@@ -500,20 +500,7 @@ def test_prepared_library_imports_with_laptop_packages_blocked(prepared):
 
 def test_prepared_code_runs_on_python_3_8(prepared):
     project, _ = prepared
-    result = subprocess.run(
-        [
-            tool("vermin"),
-            "--target=3.8-",
-            "--violations",
-            "--no-tips",
-            "--no-parse-comments",
-            "--eval-annotations",
-            str(project / "deploy"),
-        ],
-        capture_output=True,
-        text=True,
-        check=False,
-    )
+    result = vermin_38(project / "deploy")
     assert result.returncode == 0, result.stdout + result.stderr
 
 

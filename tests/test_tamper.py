@@ -16,12 +16,12 @@ import nbformat
 import pytest
 from nbgrader.nbgraderformat import MetadataValidator
 
+from autograder.bench import filled_notebook
 from autograder.course import ROOT, autograde
 from autograder.tamper import repair
 
 NAME = "03_frames"
 RELEASE = ROOT / "course" / NAME / f"{NAME}.ipynb"
-MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
 FULL = {
     "test_wrap_angle": 2.0,
     "test_rotation_matrix": 2.0,
@@ -36,19 +36,7 @@ NOT_READABLE = (
 
 def filled() -> nbformat.NotebookNode:
     """The release with every answer cell holding the reference code, as a student types it."""
-    solutions = nbformat.read(ROOT / "solutions" / NAME / f"{NAME}.ipynb", as_version=4)
-    answers = {
-        cell.metadata.nbgrader["grade_id"]: "".join(
-            line for line in cell.source.splitlines(True) if line.strip() not in MARKERS
-        )
-        for cell in solutions.cells
-        if cell.metadata.get("nbgrader", {}).get("solution")
-    }
-    notebook = nbformat.read(RELEASE, as_version=4)
-    for cell in notebook.cells:
-        grade_id = cell.metadata.get("nbgrader", {}).get("grade_id")
-        cell.source = answers.get(grade_id, cell.source)
-    return notebook
+    return filled_notebook(NAME)
 
 
 def at(notebook: nbformat.NotebookNode, grade_id: str) -> int:

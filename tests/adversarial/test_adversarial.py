@@ -15,31 +15,12 @@ import nbformat
 import pytest
 from cases import ASSIGNMENT, CASES, FULL_MARKS, expected_loss
 
+from autograder.bench import filled_notebook
 from autograder.course import ROOT
 from autograder.grade import grade_class
 from autograder.sandbox import Limits, check_sandbox
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]
-
-MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
-
-
-def filled_notebook():
-    """The released notebook with every answer cell holding the reference code."""
-    reference = nbformat.read(ROOT / "solutions" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
-    answers = {
-        cell.metadata["nbgrader"]["grade_id"]: "\n".join(
-            line for line in cell.source.splitlines() if line.strip() not in MARKERS
-        )
-        for cell in reference.cells
-        if cell.get("metadata", {}).get("nbgrader", {}).get("solution")
-    }
-    notebook = nbformat.read(ROOT / "course" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
-    for cell in notebook.cells:
-        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
-        if grade_id in answers:
-            cell.source = answers[grade_id]
-    return notebook
 
 
 def _grade_id(cell) -> str:
@@ -61,7 +42,7 @@ def build(folder, name, case, paths):
     if case.raw is not None:
         path.write_text(case.raw, encoding="utf-8")
         return
-    notebook = filled_notebook()
+    notebook = filled_notebook(ASSIGNMENT)
     for cell in notebook.cells:
         if _grade_id(cell) in case.answers:
             cell.source = case.answers[_grade_id(cell)]
