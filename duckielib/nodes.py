@@ -49,14 +49,16 @@ def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START
         start=start,
     )
     publisher = rospy.Publisher("~pose", msg.Pose2DStamped, queue_size=10)
+    # One message, refilled for each pose: publish() serializes it before it returns.
+    out = msg.Pose2DStamped()
+    out.header.frame_id = "world"
 
     def on_tick(reading: Any, wheel: str) -> None:
         pose = odometry.add(wheel, reading.data)
         if pose is None:
             return
-        out = msg.Pose2DStamped(x=pose[0], y=pose[1], theta=pose[2])
+        out.x, out.y, out.theta = pose
         out.header.stamp = reading.header.stamp
-        out.header.frame_id = "world"
         publisher.publish(out)
 
     for wheel in ("left", "right"):

@@ -371,12 +371,25 @@ class BagWriter:
         Raises:
             BagError: if the bag is closed or the time is negative.
         """
-        if self.closed:
-            raise BagError(f"{self.path} is closed; open a new BagWriter to write more.")
-        if not isinstance(time_ns, int) or time_ns < 0:
-            raise BagError(
-                f"A record time must be a whole number of nanoseconds >= 0, not {time_ns!r}."
-            )
+        connection = self.connection(
+            topic, message_type, md5sum, message_definition, callerid, latching
+        )
+        self.write_connection(connection, time_ns, data)
+
+    def connection(
+        self,
+        topic: str,
+        message_type: str,
+        md5sum: str,
+        message_definition: str,
+        callerid: Optional[str] = None,
+        latching: Optional[str] = None,
+    ) -> Any:
+        """The bag's connection for a topic and type, added on first use.
+
+        Writing many messages of one topic, get it once and pass it to
+        :meth:`write_connection`.
+        """
         key = (topic, md5sum)
         connection = self._connections.get(key)
         if connection is None:
@@ -389,6 +402,20 @@ class BagWriter:
                 latching=None if latching is None else int(latching),
             )
             self._connections[key] = connection
+        return connection
+
+    def write_connection(self, connection: Any, time_ns: int, data: bytes) -> None:
+        """Write serialized message bytes on a connection from :meth:`connection`.
+
+        Raises:
+            BagError: if the bag is closed or the time is negative.
+        """
+        if self.closed:
+            raise BagError(f"{self.path} is closed; open a new BagWriter to write more.")
+        if not isinstance(time_ns, int) or time_ns < 0:
+            raise BagError(
+                f"A record time must be a whole number of nanoseconds >= 0, not {time_ns!r}."
+            )
         self._writer.write(connection, time_ns, data)
         self.count += 1
 

@@ -1,7 +1,9 @@
 """``rosbag record`` for the in-process graph: durable recording of topics to a bag.
 
-Like ``rosbag record``, the recorder is a node that subscribes to the topics with ``AnyMsg``
-and writes each message's bytes as they arrive, with the graph's time as record time. While it
+Like ``rosbag record``, the recorder is a node that subscribes to the topics and writes each
+message's bytes, undecoded, with the graph's time as record time. Its subscriptions count as
+subscribers on the graph like any other; since they run no node code, each message is written
+the moment it is published rather than queued for a callback. While it
 records, the bag is ``NAME.bag.active``; it becomes ``NAME.bag`` when the recording is closed.
 
 Nothing recorded is lost to an ordinary failure: the bag is closed (chunks and index written)
@@ -21,7 +23,7 @@ import itertools
 import threading
 import time
 from pathlib import Path
-from typing import Any, Dict, Iterable, Optional
+from typing import Any, Callable, Dict, Iterable, Optional
 
 from duckielib.bags.io import BagWriter, PathLike
 from duckielib.errors import BagError
@@ -35,6 +37,18 @@ __all__ = ["BagRecorder", "record"]
 _DISCOVERY_PERIOD_NS = 100_000_000
 
 _numbers = itertools.count(1)
+
+
+class _Recording(Subscriber):
+    """A subscription of ``rosbag record``: hands each message's bytes on as published."""
+
+    def __init__(self, topic: str, write: Callable[[Any, bytes], None]) -> None:
+        self._write = write  # first: a latched message arrives while subscribing
+        super().__init__(topic, AnyMsg, queue_size=None)
+
+    def _enqueue(self, data: bytes) -> None:
+        if self._record is not None:
+            self._write(self._record, data)
 
 
 class BagRecorder:
@@ -83,6 +97,7 @@ class BagRecorder:
         self._node = self.graph.host_node(f"record_{next(_numbers)}")
         self._node.shutdown_hooks.append(self.close)
         self._subscribed: Dict[str, Any] = {}
+        self._connections: Dict[str, Any] = {}  # the bag's connection of each topic
         self._all = topics is None
         for topic in [] if topics is None else topics:
             self._subscribe(names.canonical(names.resolve(topic, "/")))
@@ -109,9 +124,7 @@ class BagRecorder:
             return
         self.counts.setdefault(topic, 0)
         with node_context(self._node):
-            self._subscribed[topic] = Subscriber(
-                topic, AnyMsg, self._on_message, topic, queue_size=None
-            )
+            self._subscribed[topic] = _Recording(topic, self._on_message)
 
     def _discover(self) -> None:
         if self.closed:
@@ -121,21 +134,23 @@ class BagRecorder:
                 self._subscribe(topic)
         self.graph.schedule(self.graph.now_ns + _DISCOVERY_PERIOD_NS, self._discover)
 
-    def _on_message(self, message: AnyMsg, topic: str) -> None:
+    def _on_message(self, record: Any, data: bytes) -> None:
         if self.closed:
             return
-        header = message._connection_header
+        topic = record.name
+        connection = self._connections.get(topic)
         with self._lock:
-            self._writer.write_raw(
-                topic,
-                header["type"],
-                header["md5sum"],
-                header["message_definition"],
-                self.graph.now_ns,
-                message._buff,
-                callerid=header.get("callerid") or None,
-                latching=header.get("latching"),
-            )
+            if connection is None:
+                header = record.connection_header()
+                connection = self._connections[topic] = self._writer.connection(
+                    topic,
+                    header["type"],
+                    header["md5sum"],
+                    header["message_definition"],
+                    callerid=header.get("callerid") or None,
+                    latching=header.get("latching"),
+                )
+            self._writer.write_connection(connection, self.graph.now_ns, data)
             self._unflushed = True
         self.counts[topic] += 1
         if time.monotonic() - self._last_flush >= self.flush_interval:

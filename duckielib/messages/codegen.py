@@ -307,6 +307,28 @@ def make_init(message_class: type, generic: Callable[..., None]) -> Callable[...
     return _compile("\n".join(lines) + "\n", "__init__", namespace)
 
 
+def make_setattr(message_class: type, generic: Callable[..., None]) -> Callable[..., None]:
+    """``__setattr__(self, key, value)``: store plainly fine scalars at once, as ``__init__``.
+
+    Other values and unknown names go to ``generic``, which checks them or explains.
+    """
+    namespace: Dict[str, Any] = {"_set": object.__setattr__, "_generic": generic}
+    namespace["_F32"] = FLOAT32_MAX
+    lines = ["def __setattr__(self, key, value):"]
+    for key, codec in message_class._codecs.items():
+        field = codec.field
+        test = (
+            "" if field.is_array or not field.is_primitive else _fast_test(field.base_type, "value")
+        )
+        if test:
+            lines += [
+                f"    if key == {key!r} and {test}:",
+                f"        return _set(self, {key!r}, value)",
+            ]
+    lines.append("    _generic(self, key, value)")
+    return _compile("\n".join(lines) + "\n", "__setattr__", namespace)
+
+
 def _read_string(name: str) -> List[str]:
     """Lines that read a string into ``name``: its length, then its UTF-8 bytes."""
     return [

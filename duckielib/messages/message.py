@@ -31,6 +31,7 @@ from .codegen import (
     integer_range,
     make_init,
     make_reader,
+    make_setattr,
     make_writer,
 )
 from .spec import Field, MessageSpec
@@ -511,6 +512,7 @@ def make_message_class(
     message_class._write = make_writer(message_class)
     message_class._read = make_reader(message_class)
     message_class.__init__ = make_init(message_class, Message.__init__)
+    message_class.__setattr__ = make_setattr(message_class, Message.__setattr__)
     return message_class
 
 

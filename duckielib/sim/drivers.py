@@ -77,6 +77,7 @@ class WheelsDriverNode:
         self.pub_executed = rospy.Publisher(
             base + "wheels_cmd_executed", self.msg.WheelsCmdStamped, queue_size=1
         )
+        self.executed = self.msg.WheelsCmdStamped()  # refilled for each command
         self.sub_cmd = rospy.Subscriber(
             base + "wheels_cmd", self.msg.WheelsCmdStamped, self.on_wheels_cmd, queue_size=1
         )
@@ -93,7 +94,8 @@ class WheelsDriverNode:
         except SimulationError as error:
             self.rospy.logerr(f"Ignored a wheels command: {error}")
             return
-        executed = self.msg.WheelsCmdStamped(vel_left=left, vel_right=right)
+        executed = self.executed
+        executed.vel_left, executed.vel_right = left, right
         executed.header.frame_id = msg.header.frame_id
         executed.header.stamp = self.rospy.Time.now()
         self.pub_executed.publish(executed)
@@ -134,17 +136,18 @@ class WheelEncoderNode:
         self.frame_id = f"{veh.strip('/')}/{wheel}_wheel_axis"
         self.resolution = sim.config.resolution
         self.pub_tick = rospy.Publisher(base + "tick", self.msg.WheelEncoderStamped, queue_size=1)
+        # One message, refilled for each sample (publish() serializes it at once).
+        self.tick = self.msg.WheelEncoderStamped(
+            resolution=self.resolution, type=self.msg.WheelEncoderStamped.ENCODER_TYPE_INCREMENTAL
+        )
+        self.tick.header.frame_id = self.frame_id
 
     def publish(self, reading: EncoderReading) -> None:
         """Publish one encoder sample."""
-        msg = self.msg.WheelEncoderStamped(
-            data=reading.ticks,
-            resolution=self.resolution,
-            type=self.msg.WheelEncoderStamped.ENCODER_TYPE_INCREMENTAL,
-        )
-        msg.header.stamp = stamp_at(self.rospy, round(reading.time * _NS_PER_S))
-        msg.header.frame_id = self.frame_id
-        self.pub_tick.publish(msg)
+        tick = self.tick
+        tick.data = reading.ticks
+        tick.header.stamp = stamp_at(self.rospy, round(reading.time * _NS_PER_S))
+        self.pub_tick.publish(tick)
 
 
 class KinematicsNode:
@@ -178,6 +181,9 @@ class KinematicsNode:
         self.sub_car_cmd = rospy.Subscriber(
             veh + "car_cmd_switch_node/cmd", self.msg.Twist2DStamped, self.on_car_cmd, queue_size=1
         )
+        # The messages published, refilled for each command (publish() serializes at once).
+        self.wheels = self.msg.WheelsCmdStamped()
+        self.velocity = self.msg.Twist2DStamped()
 
     def _params(self) -> Tuple[float, ...]:
         """The eight parameters, read as one namespace (one lookup per command, as cheap as one)."""
@@ -208,15 +214,15 @@ class KinematicsNode:
         k_l_inv = (gain - trim) / k
         u_r = min(max(omega_r * k_r_inv, -limit), limit)
         u_l = min(max(omega_l * k_l_inv, -limit), limit)
-        wheels = self.msg.WheelsCmdStamped(vel_left=u_l, vel_right=u_r)
+        wheels = self.wheels
+        wheels.vel_left, wheels.vel_right = u_l, u_r
         wheels.header = msg.header
         self.pub_wheels.publish(wheels)
         omega_r = u_r / k_r_inv if k_r_inv else 0.0
         omega_l = u_l / k_l_inv if k_l_inv else 0.0
-        velocity = self.msg.Twist2DStamped(
-            v=radius * (omega_r + omega_l) / 2.0,
-            omega=radius * (omega_r - omega_l) / baseline,
-        )
+        velocity = self.velocity
+        velocity.v = radius * (omega_r + omega_l) / 2.0
+        velocity.omega = radius * (omega_r - omega_l) / baseline
         velocity.header = msg.header
         self.pub_velocity.publish(velocity)
 
@@ -369,11 +375,12 @@ class GroundTruthNode:
         self.pub_pose = rospy.Publisher(
             veh + "simulator_node/ground_truth_pose", self.msg.Pose2DStamped, queue_size=1
         )
+        self.pose = self.msg.Pose2DStamped()  # refilled for each publication
+        self.pose.header.frame_id = "world"
 
     def publish(self, t_ns: int) -> None:
         """Publish the true pose at time ``t_ns``."""
-        x, y, theta = self.sim.pose
-        msg = self.msg.Pose2DStamped(x=x, y=y, theta=theta)
-        msg.header.stamp = stamp_at(self.rospy, t_ns)
-        msg.header.frame_id = "world"
-        self.pub_pose.publish(msg)
+        pose = self.pose
+        pose.x, pose.y, pose.theta = self.sim.pose
+        pose.header.stamp = stamp_at(self.rospy, t_ns)
+        self.pub_pose.publish(pose)
