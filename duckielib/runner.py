@@ -314,6 +314,11 @@ def _drive(
         simulated = bot.time
         log = "\n".join(repr(record) for record in graph.log) + "\n"
         files["log"].write_text(log, encoding="utf-8")
+    if crash is None and recorder.error is not None:
+        crash = (
+            f"Recording the bag failed ({recorder.error}); what reached the disk is in "
+            f"{recorder.active_path.name}, which duckie bag repair recovers."
+        )
     if crash is not None:
         raise (SolutionError if crash.startswith("Finish notebook") else MissionError)(
             f"{crash} The run's log is in {files['log']}."

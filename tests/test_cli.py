@@ -63,3 +63,29 @@ def _benchmark_names():
     from duckielib.bench import BENCHMARKS
 
     return BENCHMARKS
+
+
+def test_a_disk_that_fills_up_ends_the_mission_with_a_sentence(tmp_path):
+    limited = (
+        "import resource, signal, sys\n"
+        "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
+        "resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))\n"
+        "from duckielib.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", limited, "mission", "--out", str(tmp_path), "--no-animation"],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == 1
+    assert "Traceback" not in result.stderr
+    assert result.stderr.startswith("duckie: Recording the bag failed (OSError: ")
+    assert "mission.bag.active, which duckie bag repair recovers" in result.stderr
+    assert (tmp_path / "mission.bag.active").exists()
+    assert not (tmp_path / "mission.bag").exists()
+    errors = [line for line in (tmp_path / "log.txt").read_text().splitlines() if "[ERROR]" in line]
+    assert len(errors) == 1, errors
+    assert "[/record_1]: Stopped recording mission.bag" in errors[0]

@@ -16,6 +16,7 @@ recorder received the message, which is not the message's header stamp.
 
 from __future__ import annotations
 
+import contextlib
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -433,6 +434,18 @@ class BagWriter:
         if writer.bio is not None:
             writer.bio.flush()
             os.fsync(writer.bio.fileno())
+
+    def abandon(self) -> None:
+        """Close the file without finishing the bag, after a failed write.
+
+        What was flushed before stays readable by ``duckie bag repair``.
+        """
+        self.closed = True
+        bio = self._writer.bio
+        if bio is not None and not bio.closed:
+            # Its buffer may not be writable either: what was flushed before stays.
+            with contextlib.suppress(OSError):
+                bio.close()
 
     def close(self) -> None:
         """Finish the bag: write the last chunk and the index. Closing twice does nothing."""

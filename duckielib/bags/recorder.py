@@ -3,14 +3,16 @@
 Like ``rosbag record``, the recorder is a node that subscribes to the topics and writes each
 message's bytes, undecoded, with the graph's time as record time. Its subscriptions count as
 subscribers on the graph like any other; since they run no node code, each message is written
-the moment it is published rather than queued for a callback. While it
-records, the bag is ``NAME.bag.active``; it becomes ``NAME.bag`` when the recording is closed.
+the moment it is published rather than queued for a callback. While it records, the bag is
+``NAME.bag.active``; it becomes ``NAME.bag`` when the recording is closed.
 
 Nothing recorded is lost to an ordinary failure: the bag is closed (chunks and index written)
 when the ``with`` block ends, also by an exception, when the graph shuts down, and when Python
 exits. Against a killed process, the messages are written to disk at least once per second of
 wall time (by a background thread, also while the graph is idle), and ``duckie bag repair``
-recovers everything written before the kill.
+recovers everything written before the kill. A write that fails (a full disk) stops the
+recording, not the node that published: the failure is logged and kept in
+:attr:`BagRecorder.error`, and the file keeps its ``.active`` name for ``duckie bag repair``.
 
 Recording every topic also subscribes to the camera, which then renders its frames (about
 15 ms each); list the topics to record when the images are not needed.
@@ -19,6 +21,7 @@ Recording every topic also subscribes to the camera, which then renders its fram
 from __future__ import annotations
 
 import atexit
+import contextlib
 import itertools
 import threading
 import time
@@ -28,7 +31,7 @@ from typing import Any, Callable, Dict, Iterable, Optional
 from duckielib.bags.io import BagWriter, PathLike
 from duckielib.errors import BagError
 from duckielib.ros import names
-from duckielib.ros.graph import Graph, default_graph, node_context
+from duckielib.ros.graph import ERROR, Graph, default_graph, node_context
 from duckielib.ros.rospy import AnyMsg, Subscriber
 
 __all__ = ["BagRecorder", "record"]
@@ -67,6 +70,8 @@ class BagRecorder:
         path: the finished bag's path.
         active_path: the file written while recording (``path`` + ``.active``).
         counts: how many messages were recorded, by topic.
+        error: why recording stopped early (a full disk, for example), or None. The messages
+            recorded before are kept; the error is also in the graph's log.
 
     Raises:
         BagError: if the bag (or its ``.active`` file) exists already or cannot be created.
@@ -88,6 +93,7 @@ class BagRecorder:
         self.flush_interval = flush_interval
         self.counts: Dict[str, int] = {}
         self.closed = False
+        self.error: Optional[str] = None
         self._writer = BagWriter(self.active_path, compression)
         self._last_flush = time.monotonic()
         self._unflushed = False
@@ -95,7 +101,7 @@ class BagRecorder:
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._node = self.graph.host_node(f"record_{next(_numbers)}")
-        self._node.shutdown_hooks.append(self.close)
+        self._node.shutdown_hooks.append(self._close_quietly)
         self._subscribed: Dict[str, Any] = {}
         self._connections: Dict[str, Any] = {}  # the bag's connection of each topic
         self._all = topics is None
@@ -103,7 +109,7 @@ class BagRecorder:
             self._subscribe(names.canonical(names.resolve(topic, "/")))
         if self._all:
             self._discover()
-        atexit.register(self.close)
+        atexit.register(self._close_quietly)
         if flush_interval > 0:
             threading.Thread(
                 target=self._flush_periodically, name=f"flush:{self.path.name}", daemon=True
@@ -135,59 +141,99 @@ class BagRecorder:
         self.graph.schedule(self.graph.now_ns + _DISCOVERY_PERIOD_NS, self._discover)
 
     def _on_message(self, record: Any, data: bytes) -> None:
-        if self.closed:
+        if self.closed or self.error is not None:
             return
         topic = record.name
-        connection = self._connections.get(topic)
-        with self._lock:
-            if connection is None:
-                header = record.connection_header()
-                connection = self._connections[topic] = self._writer.connection(
-                    topic,
-                    header["type"],
-                    header["md5sum"],
-                    header["message_definition"],
-                    callerid=header.get("callerid") or None,
-                    latching=header.get("latching"),
-                )
-            self._writer.write_connection(connection, self.graph.now_ns, data)
-            self._unflushed = True
-        self.counts[topic] += 1
-        if time.monotonic() - self._last_flush >= self.flush_interval:
-            self.flush()
+        try:
+            with self._lock:
+                connection = self._connections.get(topic)
+                if connection is None:
+                    header = record.connection_header()
+                    connection = self._connections[topic] = self._writer.connection(
+                        topic,
+                        header["type"],
+                        header["md5sum"],
+                        header["message_definition"],
+                        callerid=header.get("callerid") or None,
+                        latching=header.get("latching"),
+                    )
+                self._writer.write_connection(connection, self.graph.now_ns, data)
+                self._unflushed = True
+            if time.monotonic() - self._last_flush >= self.flush_interval:
+                self.flush()
+            self.counts[topic] += 1
+        except Exception as error:  # a full disk must not stop the node that published
+            self._fail(error, f"a message on {topic}")
+
+    def _fail(self, error: BaseException, where: str) -> None:
+        """Stop recording after a failed write; what reached the disk stays in ``.active``."""
+        if self.error is not None:
+            return
+        self.error = f"{type(error).__name__}: {error}"
+        self._node.log(
+            ERROR,
+            f"Stopped recording {self.path.name} at {where} ({self.error}). What reached the "
+            f"disk is in {self.active_path.name}; duckie bag repair recovers it.",
+        )
 
     def _flush_periodically(self) -> None:
         while not self._stop.wait(self.flush_interval):
-            self.flush()
+            try:
+                self.flush()
+            except Exception as error:  # reported by the recorder, not lost in a thread
+                self._fail(error, "a periodic flush")
+                return
 
     def flush(self) -> None:
         """Write every message recorded so far to disk."""
         with self._lock:
-            if not self.closed and self._unflushed:
+            if not self.closed and self._unflushed and self.error is None:
                 self._writer.flush()
                 self._unflushed = False
             self._last_flush = time.monotonic()
 
+    def _close_quietly(self) -> None:
+        """Close at shutdown or exit; a failure is in :attr:`error` and the graph's log."""
+        with contextlib.suppress(BagError):
+            self.close()
+
     def close(self) -> Path:
         """Finish the bag and give it its final name. Closing twice does nothing.
 
+        After a failed write (see :attr:`error`) the bag cannot be finished: its file keeps the
+        ``.active`` name, for ``duckie bag repair``, and that path is returned.
+
         Returns:
             The finished bag's path.
+
+        Raises:
+            BagError: if finishing the bag fails now (the ``.active`` file is kept).
         """
         if self.closed:
-            return self.path
+            return self.path if self.error is None else self.active_path
         self._stop.set()
-        atexit.unregister(self.close)
+        atexit.unregister(self._close_quietly)
         try:
             with self._lock:
                 self.closed = True
-                self._writer.close()
-        finally:
+                if self.error is not None:
+                    self._writer.abandon()
+                    return self.active_path
+                try:
+                    self._writer.close()
+                except Exception as error:
+                    self._fail(error, "the end")
+                    self._writer.abandon()
+                    raise BagError(
+                        f"Could not finish {self.path}: {self.error}. What reached the "
+                        f"disk is in {self.active_path}; duckie bag repair recovers it."
+                    ) from None
             if self.active_path.exists():
                 self.active_path.replace(self.path)
+        finally:
             if not self._node.is_shutdown:
                 self._node.shutdown("the recording was closed")
-        return self.path
+        return self.path if self.error is None else self.active_path
 
 
 def record(path: PathLike, topics: Optional[Iterable[str]] = None, **options: Any) -> BagRecorder:

@@ -162,3 +162,62 @@ def test_a_killed_recording_is_repaired_up_to_its_last_flush(tmp_path):
     assert bag.message_count == report.messages
     left = read_topic(bag, LEFT)
     assert (left["data"] == left["data"][0]).all(), "a robot standing still"
+
+
+FULL_DISK = textwrap.dedent(
+    """
+    import resource, signal, sys
+    from duckielib.bags import BagRecorder
+    from duckielib.messages import String
+    from duckielib.ros import Graph, rospy
+
+    signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails instead
+    resource.setrlimit(resource.RLIMIT_FSIZE, (100_000, 100_000))  # a disk that fills up
+    graph = Graph(echo_logs=False)
+    sent = []
+
+    def talker():
+        rospy.init_node("talker")
+        publisher = rospy.Publisher("/chatter", String, queue_size=1)
+        rate = rospy.Rate(10)
+        while not rospy.is_shutdown():
+            publisher.publish(String(data="x" * 10_000))
+            sent.append(rospy.get_time())
+            rate.sleep()
+
+    graph.launch(talker)
+    recorder = BagRecorder(sys.argv[1], ["/chatter"], graph=graph, flush_interval=0)
+    graph.run(3.0)
+    left = recorder.close()
+    errors = [record.text for record in graph.log if record.level >= 8]
+    print(len(sent), recorder.counts["/chatter"], left.name, graph.nodes["/talker"].is_shutdown)
+    print(recorder.error)
+    print(errors[0] if errors else "no error logged")
+    """
+)
+
+
+def test_a_full_disk_stops_the_recording_not_the_publisher(tmp_path):
+    path = tmp_path / "full.bag"
+    done = subprocess.run(
+        [sys.executable, "-c", FULL_DISK, str(path)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 0, done.stderr
+    counts, error, logged = done.stdout.splitlines()
+    sent, recorded, left, talker_stopped = counts.split()
+    assert int(sent) == 31, "the talker kept publishing for its 3 s"
+    assert 0 < int(recorded) < 10, "the recording stopped at the limit"
+    assert talker_stopped == "False"
+    assert left == "full.bag.active", "an unfinished bag keeps its .active name"
+    assert not path.exists()
+    assert "File too large" in error
+    assert "Stopped recording full.bag" in logged
+    assert "duckie bag repair" in logged
+    report = repair_bag(tmp_path / "full.bag.active", tmp_path / "fixed.bag")
+    assert report.messages == int(recorded)
+    kept = Bag(tmp_path / "fixed.bag").read("/chatter")
+    assert [message.message.data for message in kept] == ["x" * 10_000] * int(recorded)
