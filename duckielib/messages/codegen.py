@@ -312,8 +312,11 @@ def make_setattr(message_class: type, generic: Callable[..., None]) -> Callable[
 
     Other values and unknown names go to ``generic``, which checks them or explains.
     """
-    namespace: Dict[str, Any] = {"_set": object.__setattr__, "_generic": generic}
-    namespace["_F32"] = FLOAT32_MAX
+    namespace: Dict[str, Any] = {
+        "_set": object.__setattr__,
+        "_generic": generic,
+        "_F32": FLOAT32_MAX,
+    }
     lines = ["def __setattr__(self, key, value):"]
     for key, codec in message_class._codecs.items():
         field = codec.field
