@@ -185,6 +185,22 @@ def _pattern_name(message: Any) -> str:
     return "custom" if "custom" in colors else "unknown"
 
 
+def _led_changes(bag: Bag, topic: str) -> List[Tuple[float, str]]:
+    """When each LED pattern was shown, in time order, and its name.
+
+    The emitter stamps each pattern when it shows it. A recorder in another process may
+    connect to the latched topic late and receive the pattern later (its record time), so
+    the stamps are used unless every one is 0 (an emitter that does not stamp).
+    """
+    records = [
+        (item.time, item.message.header.stamp.to_nsec() / 1e9, _pattern_name(item.message))
+        for item in bag.read(topic)
+    ]
+    stamped = any(stamp for _, stamp, _ in records)
+    changes = [(stamp if stamped else t, name) for t, stamp, name in records]
+    return sorted(changes, key=lambda change: change[0])
+
+
 def _track(tracks: Sequence[PoseTrack], suffix: str) -> Optional[PoseTrack]:
     for track in tracks:
         if track.label.endswith(suffix) and len(track):
@@ -262,11 +278,7 @@ def mission_report(
     else:
         announcements = [(item.time, item.message.data) for item in bag.read(state_topic)]
     led_topic = namespace + "led_emitter_node/led_pattern"
-    leds = (
-        [(item.time, _pattern_name(item.message)) for item in bag.read(led_topic)]
-        if led_topic in topics
-        else []
-    )
+    leds = _led_changes(bag, led_topic) if led_topic in topics else []
     tracks = pose_tracks(bag, "record") if tracks is None else tracks
     truth = _track(tracks, "ground_truth_pose")
     odometry = _track(tracks, "odometry_node/pose")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from duckielib.bags import Bag
+from duckielib.bags import Bag, BagWriter
 from duckielib.behaviour import mission_report
 from duckielib.errors import ConfigError
 from duckielib.missions import D_SHAPE, SQUARE_THEN_CIRCLE
@@ -91,6 +91,25 @@ def test_the_bag_holds_every_recorded_topic_and_reads_back_to_the_same_report(sq
     assert again.as_dict() == square.report.as_dict()
     assert square.files["trajectory"].stat().st_size > 10_000
     assert "mission_node" in square.files["log"].read_text()
+
+
+def test_lights_recorded_late_count_from_when_the_emitter_showed_them(square, tmp_path):
+    # A recorder in another process (rosbag record) may connect to the latched LED topic a
+    # second after the first state began and only then receive the pattern shown.
+    bag = Bag(square.files["bag"])
+    led_topic = "/duckiebot/led_emitter_node/led_pattern"
+    late = tmp_path / "late.bag"
+    with BagWriter(late) as writer:
+        for topic, recorded_ns, data in bag.raw_messages(bag.topics):
+            info = bag.topic(topic)
+            late_ns = max(recorded_ns, 1_500_000_000) if topic == led_topic else recorded_ns
+            writer.write_raw(topic, info.type, info.md5sum, info.message_definition, late_ns, data)
+    first_led = Bag(late).read(led_topic)[1]
+    assert first_led.time == 1.5
+    assert first_led.message.header.stamp.to_sec() < 1.0
+    report = mission_report(late, SQUARE_THEN_CIRCLE)
+    assert [run.color for run in report.states] == [run.color for run in square.report.states]
+    assert report.states_in_order, report.problems
 
 
 def test_a_run_is_deterministic_for_a_seed(reference, square, tmp_path):
