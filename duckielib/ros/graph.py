@@ -123,6 +123,7 @@ class _Actor:
         self.finished = False
         self.error: Optional[BaseException] = None
         self.predicate: Optional[Callable[[], bool]] = None
+        self.polled = True
         self.token = 0
         self.resumes_after_shutdown = 0
         label = launch.get("name") or getattr(target, "__name__", "node")
@@ -179,6 +180,10 @@ class Graph:
         self._driver: Optional[int] = None
         self._driver_wake = _Signal()
         self._waiting: List[_Actor] = []
+        # Waiting actors whose predicate must be checked after every event; the others
+        # (sleeping, spinning) only when a node has shut down since the last check.
+        self._polled = 0
+        self._shutdowns = False
         self._actors: List[_Actor] = []
         self._foreground: Dict[int, Any] = {}
         self._anonymous = itertools.count(1)
@@ -260,6 +265,8 @@ class Graph:
         pop = heapq.heappop
         try:
             while True:
+                if self._polled or self._shutdowns:
+                    self._check_waiting()
                 if self._crash is not None:
                     self._raise_crash()
                 if predicate is not None and predicate():
@@ -274,8 +281,6 @@ class Graph:
                 if t_ns > self._now_ns:
                     self._advance_to(t_ns)
                 event.action()
-                if self._waiting:
-                    self._check_waiting()
         finally:
             if outermost:
                 self._driver = None
@@ -354,21 +359,44 @@ class Graph:
             raise interrupted
 
     def _check_waiting(self) -> None:
+        everyone, self._shutdowns = self._shutdowns, False
         for actor in list(self._waiting):
-            if actor in self._waiting and actor.predicate is not None and actor.predicate():
-                self._waiting.remove(actor)
+            if (
+                (everyone or actor.polled)
+                and actor in self._waiting
+                and actor.predicate is not None
+                and actor.predicate()
+            ):
+                self._stop_waiting(actor)
                 self._resume(actor)
+
+    def _stop_waiting(self, actor: _Actor) -> None:
+        self._waiting.remove(actor)
+        if actor.polled:
+            self._polled -= 1
 
     def _wake(self, actor: _Actor, token: int) -> None:
         if actor.token == token and actor in self._waiting:
-            self._waiting.remove(actor)
+            self._stop_waiting(actor)
             self._resume(actor)
 
-    def block(self, deadline_ns: Optional[int], predicate: Callable[[], bool]) -> bool:
+    def node_shut_down(self) -> None:
+        """Note that a node shut down: sleeping and spinning nodes check whether it was theirs."""
+        self._shutdowns = True
+
+    def block(
+        self, deadline_ns: Optional[int], predicate: Callable[[], bool], polled: bool = True
+    ) -> bool:
         """Block the calling node until ``predicate()`` is true or the clock reaches a deadline.
 
         Called by rospy's blocking functions. In a launched node it hands the baton back to
         the graph; in the thread that drives the graph it drives the graph itself.
+
+        Args:
+            deadline_ns: when to stop waiting (simulated ns), or None for no deadline.
+            predicate: what ends the wait early.
+            polled: False when only a node's shutdown can make ``predicate`` true (a sleep,
+                ``spin``): it is then checked after a shutdown instead of after every event.
 
         Returns:
             Whether the predicate is true when the call returns.
@@ -389,7 +417,10 @@ class Graph:
             return predicate()
         actor.token += 1
         actor.predicate = predicate
+        actor.polled = polled
         self._waiting.append(actor)
+        if polled:
+            self._polled += 1
         if deadline_ns is not None:
             token = actor.token
             self.schedule(deadline_ns, lambda: self._wake(actor, token))
@@ -462,7 +493,7 @@ class Graph:
             waiting = [actor for actor in self._actors if not actor.finished]
             for actor in waiting:
                 if actor in self._waiting:
-                    self._waiting.remove(actor)
+                    self._stop_waiting(actor)
                 self._resume(actor)
             self._crash = None
 

@@ -184,6 +184,7 @@ class Node:
             return
         self.is_shutdown = True
         self.shutdown_reason = reason
+        self.graph.node_shut_down()
         with node_context(self):
             for hook in list(self.shutdown_hooks):
                 try:

@@ -204,7 +204,7 @@ def sleep(duration: Union[float, rostime.Duration]) -> None:
     span = _to_ns(duration)
     if span <= 0:
         return
-    node.graph.block(node.graph.now_ns + span, lambda: node.is_shutdown)
+    node.graph.block(node.graph.now_ns + span, lambda: node.is_shutdown, polled=False)
     if node.is_shutdown:
         raise ROSInterruptException("ROS shutdown request")
 
@@ -397,7 +397,7 @@ def on_shutdown(hook: Callable[[], Any]) -> None:
 def spin() -> None:
     """Keep the node alive, running its callbacks, until it shuts down."""
     node = current_node("rospy.spin()")
-    node.graph.block(None, lambda: node.is_shutdown)
+    node.graph.block(None, lambda: node.is_shutdown, polled=False)
 
 
 # -- topics -------------------------------------------------------------------------------------

@@ -503,6 +503,37 @@ def test_publish_after_shutdown_is_refused(graph):
         pub.publish("too late")
 
 
+def test_a_node_shut_down_while_it_sleeps_or_spins_wakes_at_once(graph):
+    woke = {}
+
+    def sleeper():
+        rospy.init_node("sleeper")
+        try:
+            rospy.sleep(100)
+        except rospy.ROSInterruptException:
+            woke["sleeper"] = rospy.get_time()
+
+    def spinner():
+        rospy.init_node("spinner")
+        rospy.Subscriber("stop", String, lambda m: rospy.signal_shutdown(m.data), queue_size=1)
+        rospy.spin()
+        woke["spinner"] = rospy.get_time()
+
+    def stopper():
+        rospy.init_node("stopper")
+        pub = rospy.Publisher("stop", String, queue_size=1)
+        rospy.sleep(2.0)
+        pub.publish("asked to stop")
+        rospy.spin()
+
+    for node in (sleeper, spinner, stopper):
+        graph.launch(node)
+    graph.run(1.0)
+    graph.nodes["/sleeper"].shutdown("stopped from outside")
+    graph.run(5.0)
+    assert woke == {"sleeper": 1.0, "spinner": 2.0}
+
+
 def test_graph_shutdown_interrupts_sleeping_nodes(graph):
     outcome = []
 
