@@ -44,6 +44,38 @@ def test_written_bags_read_back_exactly_with_rosbags(tmp_path, compression):
     assert [item.message for item in bag.messages()] == [pose, pattern, encoder(-41, 3_000_000_000)]
 
 
+@pytest.mark.parametrize("compression", ["none", "bz2"])
+def test_the_writer_writes_the_same_bytes_as_rosbags_own_write(tmp_path, compression):
+    topics = [("/duckiebot/pose", Pose2DStamped), (LEFT, type(encoder(0, 0))), ("/s", String)]
+    messages = [
+        (topics[i % 3], 10_000_000 * i + (999_999_999 if i == 7 else 0)) for i in range(400)
+    ]
+    ours, theirs = tmp_path / "ours.bag", tmp_path / "theirs.bag"
+    with BagWriter(ours, compression) as writer:
+        writer._writer.chunk_threshold = 4096  # several chunks, each with its index
+        connections = {}
+        for (topic, cls), t_ns in messages:
+            if topic not in connections:
+                connections[topic] = writer.connection(
+                    topic, cls._type, cls._md5sum, cls._full_text
+                )
+            writer.write_connection(connections[topic], t_ns, cls().to_bytes())
+    plain = BagWriter(theirs, compression)
+    try:
+        plain._writer.chunk_threshold = 4096
+        for (topic, cls), t_ns in messages:
+            connection = plain.connection(topic, cls._type, cls._md5sum, cls._full_text)
+            plain._writer.write(connection, t_ns, cls().to_bytes())  # rosbags' own write
+    finally:
+        plain.close()
+    assert ours.read_bytes() == theirs.read_bytes()
+    assert Bag(ours).message_count == 400
+    with BagWriter(tmp_path / "other.bag") as other, pytest.raises(
+        BagError, match=r"/s is not a connection of other\.bag"
+    ):
+        other.write_connection(connections["/s"], 0, b"")
+
+
 def test_foreign_types_decode_from_the_bags_own_definition(tmp_path):
     path = tmp_path / "foreign.bag"
     import struct
