@@ -117,6 +117,16 @@ def test_a_run_is_deterministic_for_a_seed(reference, square, tmp_path):
     assert again.report.as_dict() == square.report.as_dict()
 
 
+def test_nodes_in_threads_drive_the_same_mission_as_greenlets(
+    reference, square, tmp_path, monkeypatch
+):
+    from duckielib.ros import graph as graph_module
+
+    monkeypatch.setattr(graph_module, "_greenlet", None)  # as without the greenlet package
+    again = run_mission(reference, out=tmp_path, animation=False)
+    assert again.report.as_dict() == square.report.as_dict()
+
+
 def test_the_d_variant_is_the_same_node_with_other_data(reference, tmp_path):
     run = run_mission(reference, mission="d_shape", out=tmp_path, animation=False)
     assert run.report.states_in_order

@@ -46,6 +46,7 @@ from duckielib.ros.graph import (
     INFO,
     NS_PER_S,
     WARN,
+    copy_tree,
     current_graph,
     current_node,
     format_error,
@@ -75,6 +76,7 @@ __all__ = [
     "AnyMsg",
     # parameters
     "get_param",
+    "get_param_cached",
     "set_param",
     "has_param",
     "delete_param",
@@ -832,6 +834,33 @@ def get_param(param_name: str, default: Any = _UNSET) -> Any:
         if default is _UNSET:
             raise KeyError(param_name) from None
         return default
+
+
+def get_param_cached(param_name: str, default: Any = _UNSET) -> Any:
+    """A parameter's value, as :func:`get_param`, for code that reads it very often.
+
+    The value is kept between calls until any parameter is set or deleted, so a new value
+    still reaches the next call (rospy keeps its cache up to date the same way).
+
+    Raises:
+        KeyError: if it is not set and no default is given.
+    """
+    graph = current_graph()
+    try:
+        node: Optional[Node] = current_node()
+    except ROSInitException:
+        node = None
+    key = (node.name if node is not None else "", param_name)
+    try:
+        value = graph.param_cache[key]
+    except KeyError:
+        try:
+            value = graph.param_cache[key] = graph.get_param(_param_name(param_name))
+        except KeyError:
+            if default is _UNSET:
+                raise KeyError(param_name) from None
+            return default
+    return copy_tree(value) if isinstance(value, (dict, list)) else value
 
 
 def set_param(param_name: str, param_value: Any) -> None:

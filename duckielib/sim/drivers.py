@@ -186,8 +186,11 @@ class KinematicsNode:
         self.velocity = self.msg.Twist2DStamped()
 
     def _params(self) -> Tuple[float, ...]:
-        """The eight parameters, read as one namespace (one lookup per command, as cheap as one)."""
-        values = self.rospy.get_param(self.base[:-1])
+        """The eight parameters, read as one namespace for each command.
+
+        Cached by rospy until a parameter changes, so a new trim reaches the next command.
+        """
+        values = self.rospy.get_param_cached(self.base[:-1])
         found = []
         for name in _KINEMATICS_PARAMS:
             value = values.get(name) if isinstance(values, dict) else None

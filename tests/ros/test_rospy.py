@@ -17,9 +17,10 @@ from duckielib.messages import (
 from duckielib.ros import Graph, NodeCrashed, rospy
 
 
-@pytest.fixture
-def graph():
-    graph = Graph(stdout=io.StringIO(), stderr=io.StringIO())
+@pytest.fixture(params=["greenlets", "threads"])
+def graph(request):
+    graph = Graph(stdout=io.StringIO(), stderr=io.StringIO(), threads=request.param == "threads")
+    assert graph.threads == (request.param == "threads")
     yield graph
     graph.shutdown()
 
@@ -404,6 +405,36 @@ def test_parameters(graph):
         graph.delete_param("/nothing")
 
 
+def test_cached_parameters_follow_every_change(graph):
+    seen = []
+
+    def driver():
+        rospy.init_node("kinematics_node")
+        rate = rospy.Rate(10)
+        for _ in range(4):
+            rospy.get_param_cached("~")["gain"] = -1.0  # the caller's copy: the parameter stays
+            seen.append((rospy.get_param_cached("~"), rospy.get_param_cached("~trim", "unset")))
+            rate.sleep()
+
+    graph.launch(driver, namespace="/duckiebot", params={"gain": 1.0, "trim": 0.0})
+    graph.run(0.05)
+    graph.set_param("/duckiebot/kinematics_node/trim", -0.1)
+    graph.run(0.1)
+    graph.delete_param("/duckiebot/kinematics_node/trim")
+    graph.run(0.1)
+    graph.set_param("/duckiebot/kinematics_node", {"gain": 0.5})
+    graph.run(0.1)
+    assert seen == [
+        ({"gain": 1.0, "trim": 0.0}, 0.0),
+        ({"gain": 1.0, "trim": -0.1}, -0.1),
+        ({"gain": 1.0}, "unset"),
+        ({"gain": 0.5}, "unset"),
+    ]
+    rospy.init_node("notebook")
+    with pytest.raises(KeyError, match="/missing"):
+        rospy.get_param_cached("/missing")
+
+
 # -- names --------------------------------------------------------------------------------------
 def test_namespaces_and_remapping(graph):
     seen = {}
@@ -616,3 +647,86 @@ def test_logging_levels_and_output():
     )
     assert err.getvalue() == "[WARN] [0.000] [/talkative]: careful\n"
     graph.shutdown()
+
+
+# -- how launched nodes take turns ----------------------------------------------------------------
+def test_ctrl_c_in_a_nodes_code_stops_the_run_and_ends_only_that_node(graph):
+    steps = []
+
+    def impatient():
+        rospy.init_node("impatient")
+        rospy.sleep(1.0)
+        raise KeyboardInterrupt  # as if Ctrl-C arrived while this node's code ran
+
+    def steady():
+        rospy.init_node("steady")
+        rate = rospy.Rate(2)
+        while not rospy.is_shutdown():
+            steps.append(rospy.get_time())
+            rate.sleep()
+
+    graph.launch(impatient)
+    graph.launch(steady)
+    with pytest.raises(KeyboardInterrupt):
+        graph.run(5.0)
+    assert graph.time == 1.0
+    assert "/impatient" not in graph.nodes
+    graph.run(1.0)  # the other node carries on
+    assert steps == [0.0, 0.5, 1.0, 1.5, 2.0]
+    assert not any(record.level >= rospy.ERROR for record in graph.log)
+
+
+def test_nodes_as_greenlets_are_driven_from_one_thread():
+    import threading
+
+    graph = Graph(stdout=io.StringIO())
+    assert not graph.threads, "the course's environment has greenlet"
+
+    def ticker():
+        rospy.init_node("ticker")
+        while not rospy.is_shutdown():
+            rospy.sleep(1.0)
+
+    graph.launch(ticker)
+    graph.run(1.5)
+    failed = []
+    other = threading.Thread(target=lambda: _run_catching(graph, failed))
+    other.start()
+    other.join()
+    assert failed == [
+        "Node /ticker runs in the thread that first drove this graph; drive the graph from "
+        "that thread (or create it with Graph(threads=True))."
+    ]
+    graph.shutdown()
+    assert all(actor.finished for actor in graph._actors)
+
+
+def _run_catching(graph, failed):
+    try:
+        graph.run(1.0)
+    except rospy.ROSException as error:
+        failed.append(str(error))
+
+
+def test_a_graph_dropped_without_shutdown_leaves_its_nodes_parked():
+    import gc
+
+    from duckielib.ros import graph as graph_module
+
+    cleaned = []
+
+    def tidy():
+        rospy.init_node("tidy")
+        try:
+            rospy.spin()
+        finally:
+            cleaned.append("ran at collection")
+
+    graph = Graph(stdout=io.StringIO())
+    graph.launch(tidy)
+    graph.run(0.1)
+    parked = len(graph_module._parked)
+    del graph
+    gc.collect()
+    assert cleaned == []
+    assert len(graph_module._parked) == parked
