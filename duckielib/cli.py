@@ -7,8 +7,11 @@ command exits with status 1 (2 for a badly formed command line, as argparse does
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
-from typing import List, Optional
+import threading
+from typing import Iterator, List, Optional
 
 from duckielib.errors import DuckielibError
 
@@ -350,14 +353,46 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+@contextlib.contextmanager
+def _noting_ctrl_c(pressed: List[bool]) -> Iterator[None]:
+    """Note each Ctrl-C in ``pressed`` while raising KeyboardInterrupt as usual.
+
+    A Ctrl-C that lands inside compiled code (matplotlib drawing a frame) can come out as
+    another error; the note lets the command still end as interrupted.
+    """
+    handler = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or (
+        handler is not signal.default_int_handler
+    ):
+        yield
+        return
+
+    def on_ctrl_c(signum: int, frame: object) -> None:
+        pressed.append(True)
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, on_ctrl_c)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, handler)
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     """Run the ``duckie`` command with ``argv`` (default: the process's arguments)."""
     args = _parser().parse_args(argv)
+    pressed: List[bool] = []
     try:
-        return args.handler(args)
+        with _noting_ctrl_c(pressed):
+            return args.handler(args)
     except DuckielibError as error:
         print(f"duckie: {error}", file=sys.stderr)
         return 1
+    except Exception:
+        if not pressed:
+            raise
+        print("duckie: interrupted.", file=sys.stderr)
+        return 130
     except KeyboardInterrupt:
         print("duckie: interrupted.", file=sys.stderr)
         return 130

@@ -89,3 +89,56 @@ def test_a_disk_that_fills_up_ends_the_mission_with_a_sentence(tmp_path):
     errors = [line for line in (tmp_path / "log.txt").read_text().splitlines() if "[ERROR]" in line]
     assert len(errors) == 1, errors
     assert "[/record_1]: Stopped recording mission.bag" in errors[0]
+
+
+def _interrupted_mission(folder, patch):
+    """Run ``duckie mission`` in a child process whose ``patch`` arranges a Ctrl-C."""
+    child = (
+        "import os, signal, sys, threading, time\n"
+        "import duckielib.runner as runner\n"
+        f"{patch}\n"
+        "from duckielib.cli import main\n"
+        "sys.exit(main(sys.argv[1:]))\n"
+    )
+    return subprocess.run(
+        [sys.executable, "-c", child, "mission", "--out", str(folder)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_ctrl_c_during_the_drive_stops_the_wheels_and_keeps_the_bag(tmp_path):
+    from duckielib.bags import Bag
+
+    patch = (
+        "drive = runner._drive\n"
+        "def _drive(*args, **kwargs):\n"
+        "    press = lambda: (time.sleep(0.15), os.kill(os.getpid(), signal.SIGINT))\n"
+        "    threading.Thread(target=press, daemon=True).start()\n"
+        "    return drive(*args, **kwargs)\n"
+        "runner._drive = _drive\n"
+    )
+    result = _interrupted_mission(tmp_path, patch)
+    assert (result.returncode, result.stderr) == (130, "duckie: interrupted.\n")
+    bag = Bag(tmp_path / "mission.bag")  # closed and indexed
+    executed = bag.read("/duckiebot/wheels_driver_node/wheels_cmd_executed")
+    assert 5 < len(executed) < 900, "interrupted during the drive"
+    assert (executed[-1].message.vel_left, executed[-1].message.vel_right) == (0.0, 0.0)
+
+
+def test_ctrl_c_that_compiled_code_turns_into_another_error_still_ends_as_interrupted(tmp_path):
+    # matplotlib's drawing code reports a Ctrl-C that lands inside it as a ValueError.
+    patch = (
+        "def _animation(tracks, path):\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        time.sleep(5)\n"
+        "    except KeyboardInterrupt:\n"
+        "        raise ValueError('Invalid affine transformation matrix') from None\n"
+        "runner._animation = _animation\n"
+    )
+    result = _interrupted_mission(tmp_path, patch)
+    assert (result.returncode, result.stderr) == (130, "duckie: interrupted.\n")
+    assert (tmp_path / "mission.bag").exists()

@@ -562,12 +562,28 @@ class Graph:
             del self.nodes[node.name]
 
     def shutdown(self, reason: str = "graph shutdown") -> None:
-        """Shut every node down (running their shutdown hooks) and stop their threads."""
+        """Shut every node down (running their shutdown hooks) and stop their code.
+
+        The launched nodes go first, and what their hooks publish on the way out (a zero
+        command to the wheels) is delivered while the other nodes (the robot's drivers, a
+        recorder) still run, as on a robot whose drivers outlive the course's nodes.
+        """
+        driving = getattr(_local, "actor", None) is None and self._driver in (
+            None,
+            threading.get_ident(),
+        )
+        launched = [actor.node for actor in self._actors if actor.node is not None]
+        for node in launched:
+            if not node.is_shutdown:
+                node.shutdown(reason)
+        if driving and launched and not self.is_shutdown:
+            with contextlib.suppress(DuckielibError, ROSException):  # already in the log
+                self._drive(self._now_ns, None)
         self.is_shutdown = True
         for node in list(self.nodes.values()):
             if not node.is_shutdown:
                 node.shutdown(reason)
-        if getattr(_local, "actor", None) is None and self._driver in (None, threading.get_ident()):
+        if driving:
             waiting = [actor for actor in self._actors if not actor.finished]
             for actor in waiting:
                 if actor in self._waiting:

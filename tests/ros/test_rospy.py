@@ -525,6 +525,35 @@ def test_shutdown_hooks_run_and_close_the_node(graph):
     assert graph.topics["/wheels_cmd"].publishers == []
 
 
+def test_graph_shutdown_delivers_what_launched_nodes_say_on_the_way_out(graph):
+    from duckielib.ros.graph import node_context
+
+    heard = []
+    with node_context(graph.host_node("wheels_driver")):  # a driver: callbacks only
+        rospy.Subscriber(
+            "wheels_cmd",
+            WheelsCmdStamped,
+            lambda m: heard.append((m.vel_left, rospy.is_shutdown())),
+            queue_size=10,
+        )
+
+    def motor_node():
+        rospy.init_node("motors")
+        pub = rospy.Publisher("wheels_cmd", WheelsCmdStamped, queue_size=1)
+        rospy.on_shutdown(lambda: pub.publish(WheelsCmdStamped(vel_left=0.0, vel_right=0.0)))
+        rate = rospy.Rate(10)
+        while not rospy.is_shutdown():
+            pub.publish(WheelsCmdStamped(vel_left=0.5, vel_right=0.5))
+            rate.sleep()
+
+    graph.launch(motor_node)
+    graph.run(0.15)
+    graph.shutdown()
+    assert heard == [(0.5, False), (0.5, False), (0.0, False)], "the driver heard the zero"
+    assert graph.nodes == {}
+    assert all(actor.finished for actor in graph._actors)
+
+
 def test_publish_after_shutdown_is_refused(graph):
     rospy.init_node("short_lived")
     pub = rospy.Publisher("chatter", String, queue_size=1)
