@@ -14,7 +14,16 @@ import pytest
 import tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
-LAPTOP_ONLY = ("pymunk", "rosbags", "matplotlib", "rospy", "PIL", "nbgrader", "jupyterlab")
+LAPTOP_ONLY = (
+    "pymunk",
+    "rosbags",
+    "matplotlib",
+    "rospy",
+    "PIL",
+    "nbgrader",
+    "jupyterlab",
+    "greenlet",
+)
 
 
 def robot_modules() -> list[str]:
@@ -102,6 +111,28 @@ def test_robot_modules_import_with_laptop_packages_blocked():
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "ok"
+
+
+def test_without_greenlet_the_graph_runs_launched_nodes_in_threads():
+    script = BLOCKER.format(blocked=LAPTOP_ONLY, modules=["duckielib.ros"]) + (
+        "from duckielib.ros import Graph, rospy\n"
+        "graph = Graph(echo_logs=False)\n"
+        "ticks = []\n"
+        "def ticker():\n"
+        "    rospy.init_node('ticker')\n"
+        "    while not rospy.is_shutdown():\n"
+        "        ticks.append(rospy.get_time())\n"
+        "        rospy.sleep(0.5)\n"
+        "graph.launch(ticker)\n"
+        "graph.run(1.2)\n"
+        "graph.shutdown()\n"
+        "print(graph.threads, ticks, all(actor.finished for actor in graph._actors))\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[-2] == "True [0.0, 0.5, 1.0] True"
 
 
 def test_import_duckielib_loads_nothing_heavy():
