@@ -491,17 +491,19 @@ def test_calls_before_init_node_explain_what_to_do():
 
 
 # -- shutdown -----------------------------------------------------------------------------------
+def _motor_node():
+    """Drive at 0.5 ten times a second; a shutdown hook sends the zero command."""
+    rospy.init_node("motors")
+    pub = rospy.Publisher("wheels_cmd", WheelsCmdStamped, queue_size=1)
+    rospy.on_shutdown(lambda: pub.publish(WheelsCmdStamped(vel_left=0.0, vel_right=0.0)))
+    rate = rospy.Rate(10)
+    while not rospy.is_shutdown():
+        pub.publish(WheelsCmdStamped(vel_left=0.5, vel_right=0.5))
+        rate.sleep()
+
+
 def test_shutdown_hooks_run_and_close_the_node(graph):
     stopped = []
-
-    def motor_node():
-        rospy.init_node("motors")
-        pub = rospy.Publisher("wheels_cmd", WheelsCmdStamped, queue_size=1)
-        rospy.on_shutdown(lambda: pub.publish(WheelsCmdStamped(vel_left=0.0, vel_right=0.0)))
-        rate = rospy.Rate(10)
-        while not rospy.is_shutdown():
-            pub.publish(WheelsCmdStamped(vel_left=0.5, vel_right=0.5))
-            rate.sleep()
 
     def watcher():
         rospy.init_node("watcher")
@@ -514,7 +516,7 @@ def test_shutdown_hooks_run_and_close_the_node(graph):
         rospy.spin()
 
     graph.launch(watcher)
-    graph.launch(motor_node)
+    graph.launch(_motor_node)
     graph.run(0.25)
     graph.nodes["/motors"].shutdown("user pressed stop")
     graph.run(0.25)
@@ -537,16 +539,7 @@ def test_graph_shutdown_delivers_what_launched_nodes_say_on_the_way_out(graph):
             queue_size=10,
         )
 
-    def motor_node():
-        rospy.init_node("motors")
-        pub = rospy.Publisher("wheels_cmd", WheelsCmdStamped, queue_size=1)
-        rospy.on_shutdown(lambda: pub.publish(WheelsCmdStamped(vel_left=0.0, vel_right=0.0)))
-        rate = rospy.Rate(10)
-        while not rospy.is_shutdown():
-            pub.publish(WheelsCmdStamped(vel_left=0.5, vel_right=0.5))
-            rate.sleep()
-
-    graph.launch(motor_node)
+    graph.launch(_motor_node)
     graph.run(0.15)
     graph.shutdown()
     assert heard == [(0.5, False), (0.5, False), (0.0, False)], "the driver heard the zero"
