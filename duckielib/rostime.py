@@ -128,6 +128,9 @@ class Time(_TimeValue):
     __slots__ = ()
 
     def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
+        if type(secs) is int and type(nsecs) is int and secs >= 0 and 0 <= nsecs < _NS_PER_S:
+            self.secs, self.nsecs = secs, nsecs  # already normalised: the common case
+            return
         _TimeValue.__init__(self, secs, nsecs)
         if self.secs < 0:
             raise ValueError(f"Time cannot be negative (got {self.to_sec()} s).")

@@ -429,35 +429,63 @@ class BagWriter:
     def write_connection(self, connection: Any, time_ns: int, data: bytes) -> None:
         """Write serialized message bytes on a connection from :meth:`connection`.
 
-        The record goes into rosbags' open chunk exactly as its ``Writer.write`` puts it there
-        (a test compares the files byte for byte), without rebuilding the record's header for
-        each message: a recorder writes thousands a second.
-
         Raises:
             BagError: if the bag is closed, the time is negative, or the connection is not
                 one of this bag's.
         """
+        self.write_many(((connection, time_ns, data),))
+
+    def write_many(self, items: Iterable[Tuple[Any, int, bytes]]) -> None:
+        """Write ``(connection, time_ns, data)`` items, in order, as :meth:`write_connection`.
+
+        The records go into rosbags' open chunk exactly as its ``Writer.write`` puts them
+        there (a test compares the files byte for byte), without rebuilding a record's header
+        for each message: a recorder writes thousands a second. Items before a bad one are
+        written.
+
+        Raises:
+            BagError: if the bag is closed, a time is negative, or a connection is not one of
+                this bag's.
+        """
         if self.closed:
             raise BagError(f"{self.path} is closed; open a new BagWriter to write more.")
-        if not isinstance(time_ns, int) or time_ns < 0:
-            raise BagError(
-                f"A record time must be a whole number of nanoseconds >= 0, not {time_ns!r}."
-            )
-        known, start = self._record_starts.get(connection.id, (None, b""))
-        if known is not connection:
-            raise BagError(f"{connection.topic} is not a connection of {self.path.name}.")
         writer = self._writer
+        threshold = writer.chunk_threshold
+        starts = self._record_starts
+        pack = _MESSAGE_TAIL.pack
         chunk = writer.chunks[-1]
         out = chunk.data
-        chunk.connections[connection.id].append((time_ns, out.tell()))
-        chunk.start = min(chunk.start, time_ns)
-        chunk.end = max(chunk.end, time_ns)
-        secs, nsecs = divmod(time_ns, 1_000_000_000)
-        out.write(start + _MESSAGE_TAIL.pack(secs, nsecs, len(data)))
-        out.write(data)
-        if out.tell() > writer.chunk_threshold:
-            writer.write_chunk(chunk)
-        self.count += 1
+        index = chunk.connections
+        first, last = chunk.start, chunk.end
+        written = 0
+        try:
+            for connection, time_ns, data in items:
+                if time_ns.__class__ is not int or time_ns < 0:
+                    raise BagError(
+                        "A record time must be a whole number of nanoseconds >= 0, "
+                        f"not {time_ns!r}."
+                    )
+                known, start = starts.get(connection.id, (None, b""))
+                if known is not connection:
+                    raise BagError(f"{connection.topic} is not a connection of {self.path.name}.")
+                index[connection.id].append((time_ns, out.tell()))
+                if time_ns < first:
+                    first = time_ns
+                if time_ns > last:
+                    last = time_ns
+                out.write(start + pack(time_ns // 1_000_000_000, time_ns % 1_000_000_000, len(data)))
+                out.write(data)
+                written += 1
+                if out.tell() > threshold:
+                    chunk.start, chunk.end = first, last
+                    writer.write_chunk(chunk)
+                    chunk = writer.chunks[-1]
+                    out = chunk.data
+                    index = chunk.connections
+                    first, last = chunk.start, chunk.end
+        finally:
+            chunk.start, chunk.end = first, last
+            self.count += written
 
     def flush(self) -> None:
         """Write the messages buffered so far to disk as a chunk.

@@ -2,8 +2,9 @@
 
 Like ``rosbag record``, the recorder is a node that subscribes to the topics and writes each
 message's bytes, undecoded, with the graph's time as record time. Its subscriptions count as
-subscribers on the graph like any other; since they run no node code, each message is written
-the moment it is published rather than queued for a callback. While it records, the bag is
+subscribers on the graph like any other; since they run no node code, each message is taken
+the moment it is published rather than queued for a callback, and goes into the bag with the
+next batch (a few hundred messages, or sooner: see below). While it records, the bag is
 ``NAME.bag.active``; it becomes ``NAME.bag`` when the recording is closed.
 
 Nothing recorded is lost to an ordinary failure: the bag is closed (chunks and index written)
@@ -21,12 +22,13 @@ Recording every topic also subscribes to the camera, which then renders its fram
 from __future__ import annotations
 
 import atexit
+import collections
 import contextlib
 import itertools
 import threading
 import time
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterable, Optional
+from typing import Any, Deque, Dict, Iterable, Optional, Tuple
 
 from duckielib.bags.io import BagWriter, PathLike
 from duckielib.errors import BagError
@@ -39,19 +41,36 @@ __all__ = ["BagRecorder", "record"]
 #: How often, in simulated seconds, a recorder of all topics looks for new ones.
 _DISCOVERY_PERIOD_NS = 100_000_000
 
+#: How many messages a recorder keeps before it writes them into the bag's open chunk.
+_BATCH = 256
+
 _numbers = itertools.count(1)
 
 
 class _Recording(Subscriber):
-    """A subscription of ``rosbag record``: hands each message's bytes on as published."""
+    """A subscription of ``rosbag record``: keeps each message's bytes as published."""
 
-    def __init__(self, topic: str, write: Callable[[Any, bytes], None]) -> None:
-        self._write = write  # first: a latched message arrives while subscribing
+    def __init__(self, topic: str, recorder: BagRecorder) -> None:
+        # First: a latched message arrives while subscribing.
+        self._recorder = recorder
+        self._graph = recorder.graph
+        self._pending = recorder._pending
+        self._batch = recorder._batch
+        self._connection: Any = None
         super().__init__(topic, AnyMsg, queue_size=None)
 
     def _enqueue(self, data: bytes) -> None:
-        if self._record is not None:
-            self._write(self._record, data)
+        connection = self._connection
+        if connection is None:
+            if self._record is None:
+                return
+            connection = self._connection = self._recorder._connect(self._record)
+            if connection is None:  # the recording has stopped
+                return
+        pending = self._pending
+        pending.append((connection, self._graph.now_ns, data))
+        if len(pending) >= self._batch:
+            self._recorder._write_pending()
 
 
 class BagRecorder:
@@ -91,7 +110,11 @@ class BagRecorder:
             raise BagError(f"{self.path} exists already; choose another name or delete it first.")
         self.graph = default_graph() if graph is None else graph
         self.flush_interval = flush_interval
-        self.counts: Dict[str, int] = {}
+        self._counts: Dict[str, int] = {}
+        # Messages taken but not yet written: (connection, record time, bytes), in order. The
+        # graph's thread appends; whoever writes (that thread or the flusher) pops from the left.
+        self._pending: Deque[Tuple[Any, int, bytes]] = collections.deque()
+        self._batch = 1 if flush_interval <= 0 else _BATCH
         self.closed = False
         self.error: Optional[str] = None
         self._writer = BagWriter(self.active_path, compression)
@@ -103,7 +126,6 @@ class BagRecorder:
         self._node = self.graph.host_node(f"record_{next(_numbers)}")
         self._node.shutdown_hooks.append(self._close_quietly)
         self._subscribed: Dict[str, Any] = {}
-        self._connections: Dict[str, Any] = {}  # the bag's connection of each topic
         self._all = topics is None
         for topic in [] if topics is None else topics:
             self._subscribe(names.canonical(names.resolve(topic, "/")))
@@ -125,12 +147,18 @@ class BagRecorder:
         state = "closed" if self.closed else "recording"
         return f"<BagRecorder {self.path.name} ({state}): {sum(self.counts.values())} messages>"
 
+    @property
+    def counts(self) -> Dict[str, int]:
+        """How many messages were recorded, by topic."""
+        self._write_pending()
+        return dict(self._counts)
+
     def _subscribe(self, topic: str) -> None:
         if topic in self._subscribed:
             return
-        self.counts.setdefault(topic, 0)
+        self._counts.setdefault(topic, 0)
         with node_context(self._node):
-            self._subscribed[topic] = _Recording(topic, self._on_message)
+            self._subscribed[topic] = _Recording(topic, self)
 
     def _discover(self) -> None:
         if self.closed:
@@ -140,30 +168,48 @@ class BagRecorder:
                 self._subscribe(topic)
         self.graph.schedule(self.graph.now_ns + _DISCOVERY_PERIOD_NS, self._discover)
 
-    def _on_message(self, record: Any, data: bytes) -> None:
+    def _connect(self, record: Any) -> Any:
+        """The bag's connection for a topic's first message, or None once recording stopped."""
+        with self._lock:
+            if self.closed or self.error is not None:
+                return None
+            header = record.connection_header()
+            try:
+                return self._writer.connection(
+                    record.name,
+                    header["type"],
+                    header["md5sum"],
+                    header["message_definition"],
+                    callerid=header.get("callerid") or None,
+                    latching=header.get("latching"),
+                )
+            except Exception as error:  # a full disk must not stop the node that published
+                self._fail(error, f"the first message on {record.name}")
+                return None
+
+    def _write_pending(self) -> None:
+        with self._lock:
+            self._write_pending_locked()
+
+    def _write_pending_locked(self) -> None:
+        pending = self._pending
         if self.closed or self.error is not None:
+            pending.clear()
             return
-        topic = record.name
+        batch = [pending.popleft() for _ in range(len(pending))]
+        if not batch:
+            return
         try:
-            with self._lock:
-                connection = self._connections.get(topic)
-                if connection is None:
-                    header = record.connection_header()
-                    connection = self._connections[topic] = self._writer.connection(
-                        topic,
-                        header["type"],
-                        header["md5sum"],
-                        header["message_definition"],
-                        callerid=header.get("callerid") or None,
-                        latching=header.get("latching"),
-                    )
-                self._writer.write_connection(connection, self.graph.now_ns, data)
-                self._unflushed = True
+            self._writer.write_many(batch)
+            self._unflushed = True
             if time.monotonic() - self._last_flush >= self.flush_interval:
-                self.flush()
-            self.counts[topic] += 1
+                self._flush_locked()
         except Exception as error:  # a full disk must not stop the node that published
-            self._fail(error, f"a message on {topic}")
+            self._fail(error, f"a message on {batch[0][0].topic}")
+            return
+        counts = self._counts
+        for connection, count in collections.Counter(item[0] for item in batch).items():
+            counts[connection.topic] += count
 
     def _fail(self, error: BaseException, where: str) -> None:
         """Stop recording after a failed write; what reached the disk stays in ``.active``."""
@@ -187,10 +233,14 @@ class BagRecorder:
     def flush(self) -> None:
         """Write every message recorded so far to disk."""
         with self._lock:
-            if not self.closed and self._unflushed and self.error is None:
-                self._writer.flush()
-                self._unflushed = False
-            self._last_flush = time.monotonic()
+            self._write_pending_locked()
+            self._flush_locked()
+
+    def _flush_locked(self) -> None:
+        if not self.closed and self._unflushed and self.error is None:
+            self._writer.flush()
+            self._unflushed = False
+        self._last_flush = time.monotonic()
 
     def _close_quietly(self) -> None:
         """Close at shutdown or exit; a failure is in :attr:`error` and the graph's log."""
@@ -215,6 +265,7 @@ class BagRecorder:
         atexit.unregister(self._close_quietly)
         try:
             with self._lock:
+                self._write_pending_locked()
                 self.closed = True
                 if self.error is not None:
                     self._writer.abandon()

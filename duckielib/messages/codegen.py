@@ -308,7 +308,7 @@ def make_init(message_class: type, generic: Callable[..., None]) -> Callable[...
 
 
 def make_setattr(message_class: type, generic: Callable[..., None]) -> Callable[..., None]:
-    """``__setattr__(self, key, value)``: store plainly fine scalars at once, as ``__init__``.
+    """``__setattr__(self, key, value)``: store plainly fine values at once, as ``__init__``.
 
     Other values and unknown names go to ``generic``, which checks them or explains.
     """
@@ -316,13 +316,23 @@ def make_setattr(message_class: type, generic: Callable[..., None]) -> Callable[
         "_set": object.__setattr__,
         "_generic": generic,
         "_F32": FLOAT32_MAX,
+        "_Time": Time,
+        "_Duration": Duration,
     }
     lines = ["def __setattr__(self, key, value):"]
-    for key, codec in message_class._codecs.items():
+    for number, (key, codec) in enumerate(message_class._codecs.items()):
         field = codec.field
-        test = (
-            "" if field.is_array or not field.is_primitive else _fast_test(field.base_type, "value")
-        )
+        if field.is_array:
+            test = ""
+        elif not field.is_primitive:
+            namespace[f"_class{number}"] = codec.element.message_class
+            test = f"isinstance(value, _class{number})"
+        elif field.base_type == "time":
+            test = "isinstance(value, _Time)"
+        elif field.base_type == "duration":
+            test = "isinstance(value, _Duration)"
+        else:
+            test = _fast_test(field.base_type, "value")
         if test:
             lines += [
                 f"    if key == {key!r} and {test}:",
