@@ -469,11 +469,10 @@ class BagWriter:
                 if known is not connection:
                     raise BagError(f"{connection.topic} is not a connection of {self.path.name}.")
                 index[connection.id].append((time_ns, out.tell()))
-                if time_ns < first:
-                    first = time_ns
-                if time_ns > last:
-                    last = time_ns
-                out.write(start + pack(time_ns // 1_000_000_000, time_ns % 1_000_000_000, len(data)))
+                first = min(first, time_ns)
+                last = max(last, time_ns)
+                secs, nsecs = divmod(time_ns, 1_000_000_000)
+                out.write(start + pack(secs, nsecs, len(data)))
                 out.write(data)
                 written += 1
                 if out.tell() > threshold:
