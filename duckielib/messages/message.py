@@ -380,7 +380,7 @@ class Message:
         Raises:
             MessageError: if the bytes are cut short or longer than the message.
         """
-        view = memoryview(data)
+        view = data if type(data) is bytes else memoryview(data)
         end = self._read(view, 0)
         if end != len(view):
             raise MessageError(
@@ -392,7 +392,10 @@ class Message:
     @classmethod
     def from_bytes(cls, data: bytes) -> Message:
         """A new message read from ROS 1 wire-format bytes."""
-        return cls.__new__(cls).deserialize(data)
+        message = cls.__new__(cls)
+        if type(data) is bytes and message._read(data, 0) == len(data):
+            return message  # the common case: a whole message, read at once
+        return message.deserialize(data)
 
     # -- Python protocol -------------------------------------------------------------------
     def __eq__(self, other: object) -> bool:

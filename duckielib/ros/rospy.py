@@ -498,7 +498,10 @@ class Publisher:
         if self._record is None:
             raise ROSException(f"publish() to an unregistered() handle (topic {self.name}).")
         try:
-            message = _to_message(self.data_class, args, kwds)
+            if len(args) == 1 and not kwds and type(args[0]) is self.data_class:
+                message = args[0]  # the common case, without the checks _to_message makes
+            else:
+                message = _to_message(self.data_class, args, kwds)
             self._seq += 1
             if message._has_header:
                 message.header.seq = self._seq

@@ -54,12 +54,17 @@ def test_the_writer_writes_the_same_bytes_as_rosbags_own_write(tmp_path, compres
     with BagWriter(ours, compression) as writer:
         writer._writer.chunk_threshold = 4096  # several chunks, each with its index
         connections = {}
+        items = []
         for (topic, cls), t_ns in messages:
             if topic not in connections:
                 connections[topic] = writer.connection(
                     topic, cls._type, cls._md5sum, cls._full_text
                 )
-            writer.write_connection(connections[topic], t_ns, cls().to_bytes())
+            items.append((connections[topic], t_ns, cls().to_bytes()))
+            if len(items) <= 100:
+                writer.write_connection(*items[-1])
+        for start in range(100, 400, 75):  # batches that cross chunk boundaries
+            writer.write_many(items[start : start + 75])
     plain = BagWriter(theirs, compression)
     try:
         plain._writer.chunk_threshold = 4096
@@ -74,6 +79,20 @@ def test_the_writer_writes_the_same_bytes_as_rosbags_own_write(tmp_path, compres
         BagError, match=r"/s is not a connection of other\.bag"
     ):
         other.write_connection(connections["/s"], 0, b"")
+
+
+def test_a_bad_item_stops_a_batch_and_keeps_the_items_before_it(tmp_path):
+    path = tmp_path / "batch.bag"
+    with BagWriter(path) as writer:
+        connection = writer.connection("/s", String._type, String._md5sum, String._full_text)
+        items = [(connection, t_ns, String(data=str(t_ns)).to_bytes()) for t_ns in (5, 6, -7, 8)]
+        with pytest.raises(BagError, match="whole number of nanoseconds >= 0, not -7"):
+            writer.write_many(items)
+        assert writer.count == 2
+    assert [(item.time_ns, item.message.data) for item in Bag(path).read("/s")] == [
+        (5, "5"),
+        (6, "6"),
+    ]
 
 
 def test_foreign_types_decode_from_the_bags_own_definition(tmp_path):
