@@ -6,6 +6,8 @@ import re
 import subprocess
 import sys
 
+import pytest
+
 FIGURE_LINE = re.compile(r"^[a-z0-9_]+: \S+$")
 
 
@@ -34,6 +36,26 @@ def test_bench_messages_prints_figures_headline_last():
     assert names[0] == "import_messages_ms"
     assert names[-1] == "encoder_round_trips_per_s"
     assert float(lines[-1].split(": ")[1]) > 0
+
+
+def test_bench_mission_says_where_the_time_goes_and_leaves_messages_as_they_were():
+    from duckielib import runner
+    from duckielib.bench import mission
+    from duckielib.messages import String
+    from duckielib.messages.message import Message
+
+    to_bytes, recorded = Message.to_bytes, runner.RECORDED
+    figures = dict(mission.run())
+    assert list(figures)[-1] == "mission_realtime_factor"
+    wall = float(figures["mission_wall_s"])
+    assert 0 < float(figures["mission_physics_wall_s"]) < wall, "the physics is a part of a run"
+    assert float(figures["mission_wall_s_objects_no_bag"]) > 0
+    assert int(figures["mission_bag_messages"]) > 9000
+    assert float(figures["mission_realtime_factor"]) == pytest.approx(
+        float(figures["mission_simulated_s"]) / wall, rel=0.01
+    )
+    assert (Message.to_bytes, runner.RECORDED) == (to_bytes, recorded), "put back after the bound"
+    assert String.from_bytes(String(data="hi").to_bytes()) == String(data="hi")
 
 
 def test_unknown_benchmark_is_one_sentence_without_traceback():
