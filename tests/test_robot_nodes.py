@@ -367,6 +367,7 @@ def test_virtual_duckiebot_launch():
         "seed": "0",
         "rate": "1.0",
         "mission": "square_then_circle",
+        "paused": "false",
     }
     assert defaults.items() <= _args(LAUNCH / "virtual_duckiebot.launch").items()
     [sim_time] = [param for param in root.findall("param") if param.get("name") == "/use_sim_time"]
@@ -374,7 +375,7 @@ def test_virtual_duckiebot_launch():
     [node] = root.findall("node")
     assert (node.get("name"), node.get("ns")) == ("virtual_duckiebot", "$(arg veh)")
     params = {param.get("name"): param.get("value") for param in node.iter("param")}
-    for name in ("noise", "seed", "rate", "mission"):
+    for name in ("noise", "seed", "rate", "mission", "paused"):
         assert params[name] == f"$(arg {name})"
 
 
@@ -388,6 +389,9 @@ def test_simulation_launch_passes_the_same_robot_and_mission_to_both():
     for values in included.values():
         assert values["veh"] == "$(arg veh)"
         assert values["mission"] == "$(arg mission)"
+    assert included["virtual_duckiebot.launch"]["paused"] == "$(arg paused)"
+    paused = [arg.get("default") for arg in root.findall("arg") if arg.get("name") == "paused"]
+    assert paused == ["false"]
 
 
 @pytest.mark.ros

@@ -12,7 +12,10 @@ simulated second), and the other nodes run with ``use_sim_time`` (the launch fil
 
 Private parameters: ``~noise`` (``ideal`` or ``realistic``), ``~seed``, ``~rate``, ``~mission``
 (the start pose is that mission's), ``~mute_encoders_after`` (simulated seconds after which
-the encoders stop publishing, to test what nodes do when a driver dies; default: never).
+the encoders stop publishing, to test what nodes do when a driver dies; default: never),
+``~paused`` (true: the clock stays at 0 until a ``std_msgs/Empty`` arrives on ``~start``, as
+Gazebo starts paused, so a ``rosbag record`` started alongside has connected to every node
+before anything happens; default: false).
 
 Laptop only: it needs the simulator (pymunk).
 """
@@ -68,6 +71,7 @@ class VirtualDuckiebotNode:
         namespace: the robot's namespace, ``/VEH/``.
         rate: simulated seconds per wall-clock second.
         mute_encoders_after: stop publishing encoder ticks from this simulated time on.
+        paused: keep the clock at 0 until a message arrives on ``~start``.
     """
 
     def __init__(
@@ -77,8 +81,10 @@ class VirtualDuckiebotNode:
         namespace: str,
         rate: float = 1.0,
         mute_encoders_after: Optional[float] = None,
+        paused: bool = False,
     ) -> None:
         from rosgraph_msgs.msg import Clock
+        from std_msgs.msg import Empty
 
         self.rospy = rospy
         self.sim = sim
@@ -99,6 +105,12 @@ class VirtualDuckiebotNode:
         }
         self._clock = Clock
         self._clock_publisher = rospy.Publisher("/clock", Clock, queue_size=10)
+        self._started = threading.Event()
+        if not paused:
+            self._started.set()
+        self._start_subscriber = rospy.Subscriber(
+            "~start", Empty, lambda _: self._started.set(), queue_size=1
+        )
 
     def _publish_clock(self, t_ns: int) -> None:
         stamp = self.rospy.Time(t_ns // _NS_PER_S, t_ns % _NS_PER_S)
@@ -109,6 +121,14 @@ class VirtualDuckiebotNode:
         step_ns = round(PHYSICS_STEP_S * _NS_PER_S)
         period_ns = round(_NS_PER_S / _RATE_HZ)
         t_ns, next_frame_ns = 0, 0  # the first /clock is one step in: ROS reads 0 as "no time"
+        if not self._started.is_set():
+            self.rospy.loginfo(
+                f"Paused: the clock starts when a std_msgs/Empty arrives on "
+                f"{self._start_subscriber.name}."
+            )
+        while not self._started.wait(0.1):
+            if self.rospy.is_shutdown() or (until is not None and until()):
+                return
         started = time.monotonic()
         while not self.rospy.is_shutdown() and not (until is not None and until()):
             t_ns += step_ns
@@ -156,7 +176,12 @@ def main() -> None:
         sys.exit(1)
     mute = rospy.get_param("~mute_encoders_after", None)
     node = VirtualDuckiebotNode(
-        rospy, sim, namespace, rate, None if mute in (None, "") else float(mute)
+        rospy,
+        sim,
+        namespace,
+        rate,
+        None if mute in (None, "") else float(mute),
+        paused=str(rospy.get_param("~paused", False)).lower() == "true",
     )
     rospy.loginfo(f"Virtual Duckiebot {namespace} running at {rate:g}x real time.")
     node.spin()

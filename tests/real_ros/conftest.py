@@ -26,6 +26,8 @@ PACKAGES = ROOT / "robot_nodes" / "packages"
 VEH = "/duckiebot/"
 #: How fast the virtual Duckiebot runs against the wall clock in these tests.
 RATE = 2.0
+#: The node name of the tests' ``rosbag record`` (which adds a suffix of its own).
+RECORDER = "test_recorder"
 
 
 @pytest.fixture(scope="module")
@@ -132,12 +134,48 @@ class Master:
 
     def record(self, bag: Path, topics: List[str]) -> subprocess.Popen:
         """Start ``rosbag record`` of ``topics`` into ``bag``; return once it listens."""
-        recorder = self.start(["rosbag", "record", "-O", str(bag), *topics], bag.stem)
+        recorder = self.start(
+            ["rosbag", "record", "-O", str(bag), *topics, f"__name:={RECORDER}"], bag.stem
+        )
         deadline = time.monotonic() + 20
         while not all(self.subscribed(topic) for topic in topics):
             assert time.monotonic() < deadline, "rosbag record did not subscribe in 20 s"
             time.sleep(0.2)
         return recorder
+
+    def connected(self, topic: str, subscriber: str = RECORDER) -> bool:
+        """Whether ``topic`` has publishers and ``subscriber`` is connected to each of them.
+
+        ``subscriber`` is the node's name as given with ``__name:=`` (rosbag and rostopic
+        add a suffix to it).
+        """
+        _, _, (publishers, _, _) = self.api.getSystemState("/test")
+        nodes = next((nodes for name, nodes in publishers if name == topic), [])
+        for node in nodes:
+            _, _, uri = self.api.lookupNode("/test", node)
+            _, _, connections = xmlrpc.client.ServerProxy(uri).getBusInfo("/test")
+            # Each: (id, the other end's node, direction, transport, topic, connected, ...)
+            if not any(
+                c[1].startswith(f"/{subscriber}") and c[2] == "o" and c[4] == topic
+                for c in connections
+            ):
+                return False
+        return bool(nodes)
+
+    def start_clock(self, recorded: List[str], timeout: float = 60) -> None:
+        """Start a paused virtual Duckiebot once the recorder hears every publisher of
+        ``recorded``, so the bag misses nothing of the first seconds."""
+        deadline = time.monotonic() + timeout
+        while not all(self.connected(topic) for topic in recorded):
+            assert time.monotonic() < deadline, f"the recorder missed a topic of {recorded}"
+            time.sleep(0.2)
+        subprocess.run(
+            ["rostopic", "pub", "--once", VEH + "virtual_duckiebot/start", "std_msgs/Empty"],
+            env=self.env,
+            check=True,
+            capture_output=True,
+            timeout=60,
+        )
 
     rate = RATE
     stop = staticmethod(_stop)

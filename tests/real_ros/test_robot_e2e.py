@@ -44,15 +44,18 @@ def mission_run(master):
             f"rate:={master.rate}",
             "camera:=false",
             f"bag:={master.folder / 'robot_side.bag'}",
+            "paused:=true",
         ],
         "roslaunch",
     )
     try:
+        master.start_clock(RECORDED)
         launch.wait(timeout=150)
     except subprocess.TimeoutExpired:
         master.stop(launch)
         pytest.fail("the mission did not end in 150 s:\n" + master.log("roslaunch")[-3000:])
     finally:
+        master.stop(launch)
         master.stop(recorder)
     master.wait_for_bag(bag)
     return bag, time.monotonic() - started, master.log("roslaunch")

@@ -168,3 +168,26 @@ def test_emergency_stop_when_the_encoders_go_silent(master, tmp_path):
     held = [pose for pose in truth if 6.0 <= pose[0] <= 10.0]
     assert math.dist(held[0][1:], held[-1][1:]) < 0.002
     assert math.dist(truth[0][1:], held[0][1:]) > 0.1, "the robot never drove"
+
+
+def test_a_paused_robot_keeps_its_clock_at_zero_until_started(master):
+    robot = master.start(
+        ["roslaunch", "course_nodes", "virtual_duckiebot.launch", "paused:=true"], "robot_paused"
+    )
+    listener = master.start(
+        ["rostopic", "echo", "-n", "1", "/clock", "__name:=clock_listener"], "clock_listener"
+    )
+    try:
+        deadline = time.monotonic() + 60
+        while not master.connected("/clock", "clock_listener"):
+            assert listener.poll() is None, "a /clock message came while paused"
+            assert time.monotonic() < deadline, "rostopic echo did not connect to /clock"
+            time.sleep(0.2)
+        time.sleep(2.0)  # two simulated seconds, were the clock running
+        assert listener.poll() is None, "a /clock message came while paused"
+        master.start_clock([])
+        assert listener.wait(timeout=60) == 0
+        assert "secs:" in master.log("clock_listener")
+    finally:
+        master.stop(listener)
+        master.stop(robot)
