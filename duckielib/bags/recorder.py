@@ -145,7 +145,8 @@ class BagRecorder:
 
     def __repr__(self) -> str:
         state = "closed" if self.closed else "recording"
-        return f"<BagRecorder {self.path.name} ({state}): {sum(self.counts.values())} messages>"
+        taken = sum(self._counts.values()) + len(self._pending)  # no writing to show it
+        return f"<BagRecorder {self.path.name} ({state}): {taken} messages>"
 
     @property
     def counts(self) -> Dict[str, int]:
