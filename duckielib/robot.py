@@ -137,8 +137,11 @@ def mission_main(argv: Optional[List[str]] = None) -> None:
     finally:
         restore()
     for guard in guards:
-        guard.stop("the mission finished")
-        guard.close()
+        if guard.callback_error is None:
+            guard.stop("the mission finished")
+        guard.close()  # after a callback's exception, the guard has stopped the wheels
+        if guard.callback_error is not None:
+            _fail("mission_node", f"a callback raised {guard.callback_error}")
 
 
 def _wait_for_clock(rospy: Any) -> None:

@@ -9,7 +9,7 @@ of these end with the wheels at zero:
 - an exception in the node's main code: :meth:`SafetyGuard.run` stops the wheels, then lets
   the exception through (the node ends with an error);
 - an exception in a subscriber's callback: rospy only logs those, and the node would go on
-  driving blind, so the guard shuts the node down (which stops the wheels);
+  driving blind, so the guard shuts the node down as Ctrl-C would (which stops the wheels);
 - encoder silence: when no encoder tick arrives for :data:`ENCODER_TIMEOUT_S` after the first
   one, the guard engages the wheels driver's emergency stop (the driver then ignores every
   command) and releases it when ticks come back.
@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import importlib
 import logging
+import os
+import signal
 import threading
 import time
 from typing import Any, Callable, List, Optional
@@ -65,6 +67,7 @@ class SafetyGuard:
     Attributes:
         stops: why the wheels were stopped, in order (for logs and tests).
         estop_engaged: whether the guard holds the emergency stop now.
+        callback_error: the first exception a callback raised (``"Type: message"``), or None.
     """
 
     def __init__(self, rospy: Any, encoder_timeout: float = ENCODER_TIMEOUT_S) -> None:
@@ -72,6 +75,7 @@ class SafetyGuard:
         self.encoder_timeout = encoder_timeout
         self.stops: List[str] = []
         self.estop_engaged = False
+        self.callback_error: Optional[str] = None
         msg = importlib.import_module("duckietown_msgs.msg")
         self._msg = msg
         self._lock = threading.Lock()
@@ -116,8 +120,8 @@ class SafetyGuard:
         """Command zero to the chassis and the wheels, and remember why.
 
         The zeros are sent again every 50 ms for :data:`_HOLD_S` (wall clock): while rospy
-        runs its shutdown hooks, the node's own loop may still be running in another thread
-        (it is when a callback failed) and send one more command; the last word must be zero.
+        runs its shutdown hooks, the node's other threads (a timer, a callback) may still send
+        a command; the last word must be zero.
         """
         with self._lock:
             self.stops.append(reason)
@@ -160,10 +164,17 @@ class SafetyGuard:
             self.rospy.loginfo("Encoder ticks are back: emergency stop released.")
 
     def _on_callback_error(self, text: str) -> None:
-        if self._ended.is_set():
+        if self._ended.is_set() or self.callback_error is not None:
             return
+        self.callback_error = text
         self._shutdown_reason = f"a callback raised an exception ({text})"
-        self.rospy.signal_shutdown(self._shutdown_reason)
+        if signal.getsignal(signal.SIGINT) is getattr(self.rospy.core, "_ros_signal", None):
+            # Shut down as Ctrl-C does, in the main thread, where the node's loop runs: the
+            # loop waits while the zeros go out, then finds rospy shut down. Shut down from
+            # this callback's thread, the loop could send one more command after the last zero.
+            os.kill(os.getpid(), signal.SIGINT)
+        else:  # rospy's signal handlers are off (init_node(disable_signals=True))
+            self.rospy.signal_shutdown(self._shutdown_reason)
 
     def _watch(self) -> None:
         while not self._ended.wait(self.encoder_timeout / 5):

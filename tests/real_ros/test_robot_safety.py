@@ -47,7 +47,7 @@ def mission_node(mission):
             raise RuntimeError("a bug in a callback")
 
     rospy.Subscriber("simulator_node/ground_truth_pose", Pose2DStamped, on_pose, queue_size=1)
-    rate = rospy.Rate(10)
+    rate = rospy.Rate({hz})
     while not rospy.is_shutdown():
         now = rospy.get_time()
         if ENDING == "finish" and now > 3.0:
@@ -59,14 +59,14 @@ def mission_node(mission):
 """
 
 
-def _drive(master, tmp_path: Path, ending: str, mute: str = "") -> Tuple[Bag, int]:
+def _drive(master, tmp_path: Path, ending: str, mute: str = "", hz: int = 10) -> Tuple[Bag, int]:
     """Run the virtual Duckiebot and a forward-driving mission node ended by ``ending``.
 
     Returns:
         The recorded bag, and the mission node's exit status.
     """
     solution = tmp_path / "solution.py"
-    solution.write_text(master.solution.read_text() + DRIVER.format(ending=ending))
+    solution.write_text(master.solution.read_text() + DRIVER.format(ending=ending, hz=hz))
     bag = tmp_path / f"{ending}.bag"
     recorder = master.record(bag, TOPICS)
     robot = master.start(
@@ -148,10 +148,13 @@ def test_wheels_stop_when_the_main_code_raises(master, tmp_path):
 
 
 def test_wheels_stop_when_a_callback_raises(master, tmp_path):
-    bag, _ = _drive(master, tmp_path, "callback")
+    # A fast loop: shut down from the callback's thread, its next command came after the zeros.
+    bag, status = _drive(master, tmp_path, "callback", hz=1000)
+    assert status == 1
     _assert_stopped(bag)
     log = (tmp_path / "mission_callback.log").read_text()
-    assert "a callback raised an exception" in log
+    assert "Wheels stopped: a callback raised an exception (RuntimeError: a bug" in log
+    assert "mission_node: a callback raised RuntimeError: a bug in a callback" in log
 
 
 def test_emergency_stop_when_the_encoders_go_silent(master, tmp_path):
