@@ -76,6 +76,7 @@ def _drive(master, tmp_path: Path, ending: str, mute: str = "", hz: int = 10) ->
             "virtual_duckiebot.launch",
             f"rate:={master.rate}",
             f"mute_encoders_after:={mute}",
+            "paused:=true",
         ],
         f"robot_{ending}",
     )
@@ -91,6 +92,10 @@ def _drive(master, tmp_path: Path, ending: str, mute: str = "", hz: int = 10) ->
         start_new_session=True,
     )
     try:
+        # The clock starts once the recorder hears the robot and the mission node's guard (the
+        # only publisher of emergency_stop): the bag has every instant, and each wait below
+        # is at least as long in simulated time, however slowly the nodes started.
+        master.start_clock(TOPICS)
         if ending == "sigint":
             time.sleep(3.0 / master.rate + 2.0)  # driving for a few simulated seconds
             os.killpg(node.pid, signal.SIGINT)
