@@ -134,19 +134,23 @@ def _interrupted_mission(folder, patch):
 def test_ctrl_c_during_the_drive_stops_the_wheels_and_keeps_the_bag(tmp_path):
     from duckielib.bags import Bag
 
+    # Ctrl-C once the simulated clock passes 10 s (of 64), however fast the machine runs.
     patch = (
-        "drive = runner._drive\n"
-        "def _drive(*args, **kwargs):\n"
-        "    press = lambda: (time.sleep(0.15), os.kill(os.getpid(), signal.SIGINT))\n"
-        "    threading.Thread(target=press, daemon=True).start()\n"
-        "    return drive(*args, **kwargs)\n"
-        "runner._drive = _drive\n"
+        "from duckielib.sim.simulator import Simulator\n"
+        "advance = Simulator._advance\n"
+        "def _advance(self, count):\n"
+        "    advance(self, count)\n"
+        "    if self._steps * self.dt >= 10.0 and not getattr(self, 'pressed', False):\n"
+        "        self.pressed = True\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "Simulator._advance = _advance\n"
     )
     result = _interrupted_mission(tmp_path, patch)
     assert (result.returncode, result.stderr) == (130, "duckie: interrupted.\n")
     bag = Bag(tmp_path / "mission.bag")  # closed and indexed
     executed = bag.read("/duckiebot/wheels_driver_node/wheels_cmd_executed")
-    assert 5 < len(executed) < 900, "interrupted during the drive"
+    times = [item.time for item in executed]
+    assert 9.9 < times[-1] < 10.5, f"interrupted at 10 s of simulated time, not {times[-1]:.2f} s"
     assert (executed[-1].message.vel_left, executed[-1].message.vel_right) == (0.0, 0.0)
 
 
