@@ -168,7 +168,8 @@ class SafetyGuard:
             return
         self.callback_error = text
         self._shutdown_reason = f"a callback raised an exception ({text})"
-        if signal.getsignal(signal.SIGINT) is getattr(self.rospy.core, "_ros_signal", None):
+        ros_handler = getattr(getattr(self.rospy, "core", None), "_ros_signal", None)
+        if ros_handler is not None and signal.getsignal(signal.SIGINT) is ros_handler:
             # Shut down as Ctrl-C does, in the main thread, where the node's loop runs: the
             # loop waits while the zeros go out, then finds rospy shut down. Shut down from
             # this callback's thread, the loop could send one more command after the last zero.
