@@ -131,12 +131,6 @@ class Time(_TimeValue):
     __slots__ = ()
 
     def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
-        if type(secs) is int and type(nsecs) is int:  # the common case
-            if not 0 <= nsecs < _NS_PER_S:
-                secs, nsecs = divmod(secs * _NS_PER_S + nsecs, _NS_PER_S)
-            if secs >= 0:
-                self.secs, self.nsecs = secs, nsecs
-                return
         _TimeValue.__init__(self, secs, nsecs)
         if self.secs < 0:
             raise ValueError(f"Time cannot be negative (got {self.to_sec()} s).")
