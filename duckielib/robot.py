@@ -49,12 +49,13 @@ def _fail(node: str, text: str) -> None:
 def _real_rospy(node: str) -> Any:
     """Import the real rospy (Debian's on a laptop, Noetic's on the robot)."""
     from duckielib.ros.backend import is_in_process, use_debian_ros
+    from duckielib.ros.modules import provided_elsewhere
 
     use_debian_ros()
-    try:
-        import rospy
-    except ImportError:
+    if "rospy" not in sys.modules and not provided_elsewhere("rospy"):
         _fail(node, "rospy is not installed here; on a laptop, install ROS 1 with `make ros`.")
+    import rospy
+
     if is_in_process(rospy):
         _fail(node, "this node needs a real ROS master; in a notebook, use VirtualDuckiebot.")
     return rospy

@@ -23,13 +23,14 @@ Pure: standard library only, Python 3.8 (deployed to the robot).
 
 from __future__ import annotations
 
-import importlib
 import logging
 import os
 import signal
 import threading
 import time
 from typing import Any, Callable, List, Optional
+
+from duckielib.ros.backend import message_classes
 
 __all__ = ["ENCODER_TIMEOUT_S", "SafetyGuard", "guarded_init"]
 
@@ -76,7 +77,7 @@ class SafetyGuard:
         self.stops: List[str] = []
         self.estop_engaged = False
         self.callback_error: Optional[str] = None
-        msg = importlib.import_module("duckietown_msgs.msg")
+        msg = message_classes(rospy)
         self._msg = msg
         self._lock = threading.Lock()
         self._last_tick: Optional[float] = None  # watched from the first tick on

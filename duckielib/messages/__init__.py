@@ -154,6 +154,7 @@ def _install_modules() -> None:
             else get_message_class(full_name)
         )
         setattr(getattr(parent, kind), short_name, cls)
+        getattr(parent, kind).__all__.append(short_name)  # for ``from std_msgs.msg import *``
         globals()[short_name] = cls
 
 

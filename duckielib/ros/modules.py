@@ -1,23 +1,35 @@
 """Make robot code's imports (``import rospy``, ``from std_msgs.msg import String``...) work.
 
 Code written for a Duckiebot imports rospy, the message packages and Duckietown's ``DTROS``
-by their usual names. :func:`install_modules` points those names at the in-process graph and
-the course's message classes, so that code runs unchanged in a notebook. A real ROS
-installation on the Python path is never shadowed unless ``replace_real=True`` is given.
+by their usual names. Once :mod:`duckielib.ros` is imported, those names resolve to the
+in-process graph and the course's message classes wherever nothing else provides them: a
+finder placed *last* on ``sys.meta_path`` serves them only when no real ROS installation on the
+Python path does. So robot code runs unchanged in a notebook with no set-up call to forget, and
+a real rospy (Debian's, a robot's) always wins.
+
+:func:`install_modules` serves the names at once, and with ``replace_real=True`` even where a
+real ROS is installed (the mission runner does this for the nodes it runs in-process).
 """
 
 from __future__ import annotations
 
 import contextlib
-import importlib.util
+import importlib.abc
+import importlib.machinery
 import sys
 import types
-from typing import Dict, Iterator, List
+from typing import Dict, Iterator, List, Optional, Sequence
 
 from duckielib import messages
 from duckielib.ros import dtros, rospy
 
-__all__ = ["install_modules", "modules_installed", "uninstall_modules"]
+__all__ = [
+    "RobotImports",
+    "install_modules",
+    "modules_installed",
+    "provided_elsewhere",
+    "uninstall_modules",
+]
 
 _MESSAGE_PACKAGES = ("std_msgs", "sensor_msgs", "duckietown_msgs", "std_srvs")
 
@@ -61,7 +73,7 @@ def install_modules(replace_real: bool = False) -> List[str]:
     for top, modules in _aliases().items():
         current = sys.modules.get(top)
         real = (current is not None and not _is_ours(current)) or (
-            current is None and importlib.util.find_spec(top) is not None
+            current is None and provided_elsewhere(top)
         )
         if real and not replace_real:
             continue
@@ -71,6 +83,16 @@ def install_modules(replace_real: bool = False) -> List[str]:
             sys.modules[name] = module
         installed.append(top)
     return installed
+
+
+def provided_elsewhere(top: str) -> bool:
+    """Whether a finder other than the course's own finds the top-level module ``top``."""
+    for finder in sys.meta_path:
+        if isinstance(finder, RobotImports) or not hasattr(finder, "find_spec"):
+            continue
+        if finder.find_spec(top, None) is not None:
+            return True
+    return False
 
 
 def uninstall_modules() -> None:
@@ -102,3 +124,47 @@ def modules_installed(replace_real: bool = False) -> Iterator[List[str]]:
                 sys.modules.pop(name, None)
             else:
                 sys.modules[name] = module
+
+
+class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """The last resort for robot code's imports: serves the in-process modules by their names.
+
+    It sits at the end of ``sys.meta_path``, so Python asks it only after every other finder
+    (the real rospy and message packages on the path among them) came back empty-handed.
+    """
+
+    def find_spec(
+        self, fullname: str, path: Optional[Sequence[str]] = None, target: object = None
+    ) -> Optional[importlib.machinery.ModuleSpec]:
+        """A spec for a name the course serves (``rospy``, ``std_msgs.msg``...), else None."""
+        top = fullname.partition(".")[0]
+        if top not in _SERVED or fullname not in _SERVED[top]:
+            return None
+        return importlib.machinery.ModuleSpec(fullname, self)
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
+        """A placeholder module, replaced by :meth:`exec_module`."""
+        # A placeholder: exec_module puts duckielib's own module in its place, so the module
+        # (duckielib.ros.rospy, say) keeps its own name and spec.
+        return types.ModuleType(spec.name)
+
+    def exec_module(self, module: types.ModuleType) -> None:
+        """Put duckielib's modules for the name's package into ``sys.modules``."""
+        top = module.__name__.partition(".")[0]
+        for name, served in _aliases()[top].items():
+            if name == "duckietown":
+                served._duckielib_alias = True  # type: ignore[attr-defined]
+            if not (name != module.__name__ and name in sys.modules):
+                sys.modules[name] = served
+
+
+#: The names the finder serves: top-level name -> its module names.
+_SERVED: Dict[str, List[str]] = {top: list(modules) for top, modules in _aliases().items()}
+
+
+def _register_finder() -> None:
+    if not any(isinstance(finder, RobotImports) for finder in sys.meta_path):
+        sys.meta_path.append(RobotImports())
+
+
+_register_finder()

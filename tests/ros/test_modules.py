@@ -117,3 +117,78 @@ def test_a_real_ros_installation_is_not_shadowed(tmp_path):
         "['duckietown', 'duckietown_msgs', 'rospy', 'sensor_msgs', 'std_msgs', 'std_srvs']",
         "False",
     ]
+
+
+def run_python(script):
+    """Run ``script`` in a fresh Python (a fresh kernel's view of the imports); its stdout."""
+    result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return result.stdout
+
+
+def test_robot_imports_need_no_set_up_call_once_the_graph_is_imported():
+    out = run_python(
+        "import duckielib.ros\n"
+        "import rospy\n"
+        "from duckietown.dtros import DTROS\n"
+        "from duckietown_msgs.msg import Pose2DStamped\n"
+        "from std_msgs.msg import *\n"
+        "print(rospy.__name__, Pose2DStamped.__module__, String._type, Empty._type)\n"
+    )
+    assert out.split() == [
+        "duckielib.ros.rospy",
+        "duckielib.messages.duckietown_msgs.msg",
+        "std_msgs/String",
+        "std_msgs/Empty",
+    ]
+
+
+def test_a_real_ros_on_the_path_wins_over_the_served_modules(tmp_path):
+    for package in ("rospy", "std_msgs"):
+        (tmp_path / package).mkdir()
+        (tmp_path / package / "__init__.py").write_text("REAL = True\n")
+    (tmp_path / "std_msgs" / "msg.py").write_text("REAL = True\n")
+    out = run_python(
+        "import sys\n"
+        "import duckielib.ros\n"
+        f"sys.path.append({str(tmp_path)!r})  # as use_debian_ros() does\n"
+        "import rospy, std_msgs.msg, duckietown_msgs.msg\n"
+        "print(getattr(rospy, 'REAL', False), getattr(std_msgs.msg, 'REAL', False),\n"
+        "      duckietown_msgs.msg.__name__)\n"
+    )
+    assert out.split() == ["True", "True", "duckielib.messages.duckietown_msgs.msg"]
+
+
+@pytest.mark.parametrize("real_ros_on_path", [False, True])
+def test_the_library_odometry_node_runs_whatever_was_imported_before(tmp_path, real_ros_on_path):
+    # The cell order of notebook 07: the node and the graph, never `import duckietown_msgs`.
+    # With another duckietown_msgs on the path (a robot's, Debian's), the node on the
+    # in-process graph still uses the graph's own message classes.
+    (tmp_path / "duckietown_msgs").mkdir()
+    (tmp_path / "duckietown_msgs" / "__init__.py").write_text("")
+    (tmp_path / "duckietown_msgs" / "msg.py").write_text("REAL = True\n")
+    path = f"import sys; sys.path.append({str(tmp_path)!r})\n" if real_ros_on_path else ""
+    out = run_python(
+        path + "from duckielib.messages import Pose2DStamped\n"
+        "from duckielib.missions import TASK_START\n"
+        "from duckielib.nodes import odometry_node\n"
+        "from duckielib.ros import rospy\n"
+        "from duckielib.sim import VirtualDuckiebot\n"
+        "from duckielib.solution import load_solution\n"
+        "import sys\n"
+        "assert 'duckietown_msgs' not in sys.modules\n"
+        "bot = VirtualDuckiebot(seed=0)\n"
+        "bot.launch(odometry_node, rospy, load_solution(), TASK_START)\n"
+        "seen = []\n"
+        "def listener():\n"
+        "    rospy.init_node('listener')\n"
+        "    rospy.Subscriber('odometry_node/pose', Pose2DStamped,\n"
+        "                     lambda msg: seen.append((msg.x, msg.y)))\n"
+        "    rospy.spin()\n"
+        "bot.launch(listener)\n"
+        "bot.run(1.0)\n"
+        "print(len(seen), round(seen[-1][0], 2), round(seen[-1][1], 2))\n"
+    )
+    count, x, y = out.split()
+    assert int(count) >= 25  # about 30 pairs of encoder readings a second
+    assert (float(x), float(y)) == (0.32, 0.32)  # standing still at the task's start
