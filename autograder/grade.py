@@ -8,7 +8,9 @@ the second is handed, by a preprocessor that takes the place of nbgrader's ``Exe
 students are graded at once by threads: while one student's notebook runs in its sandbox, the
 others' bookkeeping goes on; every gradebook access holds one lock, so grades are written one
 at a time and none is lost. Each sandbox has its own network namespace, so the kernels' ports
-never collide (the race plain nbgrader has when run in parallel).
+never collide (the race plain nbgrader has when run in parallel). What comes back from the
+sandbox is read as data: the executed notebook's error outputs name the cells outside the tests
+that raised (:func:`raised_outside_tests`), judged on the notebook this process sent.
 
 Input: a folder with one folder (or ``.zip``) per student, holding their assignment folders
 (a copy of ``course/``), or nbgrader's own ``submitted/STUDENT/ASSIGNMENT`` layout.
@@ -36,12 +38,13 @@ import nbformat
 from autograder import sandbox
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
 from autograder.driving import Driving, drive
-from autograder.execute import METADATA_KEY, mark_not_run
+from autograder.execute import METADATA_KEY, NOT_RUN, mark_not_run
 from autograder.feedback import failure_messages, write_feedback
 from autograder.sandbox import NOBODY, Limits
 from autograder.tamper import repair
+from duckielib.handin import raised_cells
 
-__all__ = ["StudentResult", "grade_class", "find_submissions"]
+__all__ = ["StudentResult", "grade_class", "find_submissions", "raised_outside_tests"]
 
 _EXECUTE = Path(__file__).resolve().parent / "execute.py"
 _GRADEBOOK = threading.RLock()
@@ -155,9 +158,43 @@ def _sandboxed_execute_class(
             found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
             assignment = resources["nbgrader"]["assignment"]
             notes.setdefault(key, []).extend(f"{assignment}: {problem}" for problem in found)
+            raised = raised_outside_tests(assignment, nb, executed, limits.cell_seconds)
+            if raised is not None:
+                notes[key].append(raised)
             return executed, resources
 
     return SandboxedExecute
+
+
+def raised_outside_tests(
+    assignment: str, sent: Any, executed: Any, cell_seconds: Optional[int] = None
+) -> Optional[str]:
+    """One sentence naming every cell outside the test cells that raised, or None if none did.
+
+    Which cells are tests, where each cell is and what it says come from ``sent``: the notebook
+    this process handed to the run, rebuilt on the release's instructor cells
+    (:func:`autograder.tamper.repair`, then nbgrader's own restoring from the gradebook), so a
+    student cannot turn a cell into a test or out of one. Only the error outputs are read from
+    ``executed``, what came back from the run, and only as text. Cells that never ran because
+    the kernel died (the ``NotRun`` error of :func:`autograder.execute.mark_not_run`) are left
+    out: the kernel's death is a problem of its own.
+
+    Args:
+        assignment: the assignment's name, which starts the sentence.
+        sent: the notebook as sent to be run.
+        executed: the same notebook as it came back, with its outputs.
+        cell_seconds: the time limit of a cell, quoted for a cell that ran out of it.
+    """
+    raised = [
+        cell
+        for cell in raised_cells(sent.cells, executed.cells, cell_seconds, skip=(NOT_RUN,))
+        if not sent.cells[cell.number - 1].get("metadata", {}).get("nbgrader", {}).get("grade")
+    ]
+    if not raised:
+        return None
+    cells = "1 cell" if len(raised) == 1 else f"{len(raised)} cells"
+    found = "; ".join(cell.describe() for cell in raised)
+    return f"{assignment}: {cells} outside the tests raised: {found}"
 
 
 def _links(directory: str, names: List[str]) -> List[str]:

@@ -75,12 +75,16 @@ class Limits:
 
 
 def _readonly_paths() -> List[str]:
-    """What the sandbox sees read-only: the system, the Python installation, the library."""
+    """What the sandbox sees read-only: the system, Python, the library, the robot project.
+
+    Notebook 11 reads the course's robot project (``robot_nodes/``), as students do.
+    """
     import duckielib
+    from duckielib.robot_project import PROJECT
 
     paths = ["/usr", "/etc", sys.prefix, sys.base_prefix]
     library = Path(duckielib.__file__).resolve().parent
-    paths += [str(library), str(Path(__file__).resolve().parent)]
+    paths += [str(library), str(Path(__file__).resolve().parent), str(PROJECT)]
     real_python = Path(sys.executable).resolve().parent.parent
     paths.append(str(real_python))
     unique: List[str] = []
@@ -88,6 +92,13 @@ def _readonly_paths() -> List[str]:
         if path not in unique and Path(path).exists():
             unique.append(path)
     return unique
+
+
+def _generated_robot_folders() -> List[str]:
+    """The folders of the robot project that ``duckie robot prepare`` writes, where they exist."""
+    from duckielib.robot_project import GENERATED, PROJECT
+
+    return [str(PROJECT / name) for name in GENERATED if (PROJECT / name).is_dir()]
 
 
 def _parents(path: str) -> List[str]:
@@ -146,6 +157,10 @@ def sandboxed_command(
                 made.add(parent)
         args += ["--ro-bind", path, path]
         made.add(path)
+    # `duckie robot prepare` writes a solution into the robot project (the reference one, on an
+    # instructor's machine): those folders stay out of sight.
+    for path in _generated_robot_folders():
+        args += ["--tmpfs", path]
     args += [
         "--dev", "/dev",
         "--proc", "/proc",

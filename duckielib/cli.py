@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import signal
 import sys
 import threading
@@ -134,6 +135,41 @@ def _export(args: argparse.Namespace) -> int:
     print(export.report())
     print(f"Wrote {output}.")
     return 0
+
+
+def _handin(args: argparse.Namespace) -> int:
+    from duckielib.handin import handin, handin_notebooks
+
+    count = len(handin_notebooks(args.folder, args.output))
+    print(
+        f"Running your {count} notebooks from top to bottom, as grading does (about a minute)...",
+        flush=True,
+    )
+    check = handin(args.folder, args.output, progress=lambda run: print(run.summary(), flush=True))
+    todo = [run.name for run in check.runs if not run.clean]
+    if todo:
+        print(
+            f"Unfinished or not running to the end: {', '.join(todo)}. Fix them if you can, "
+            "then hand in again; cells that raise are shown to your instructor."
+        )
+    else:
+        print("Every notebook runs from top to bottom and passes its visible tests.")
+    print(f"Wrote {args.output} ({count} notebooks): hand in this file.")
+    return 0
+
+
+def _add_handin(commands: argparse._SubParsersAction) -> None:
+    """``duckie handin``: check a student's notebooks as grading runs them, and zip them."""
+    hand = commands.add_parser(
+        "handin", help="check your notebooks as grading runs them, and zip them to hand in"
+    )
+    hand.add_argument(
+        "folder", nargs="?", default="course", help="your folder of notebooks (default: course)"
+    )
+    hand.add_argument(
+        "-o", "--output", required=True, help="the zip to write, named after you (NAME.zip)"
+    )
+    hand.set_defaults(handler=_handin)
 
 
 def _mission(args: argparse.Namespace) -> int:
@@ -286,6 +322,8 @@ def _parser() -> argparse.ArgumentParser:
     export.add_argument("-o", "--output", required=True, help="the .py file to write")
     export.set_defaults(handler=_export)
 
+    _add_handin(commands)
+
     release = commands.add_parser(
         "release", help="regenerate course/ from solutions/ with nbgrader (instructors)"
     )
@@ -388,6 +426,11 @@ def main(argv: Optional[List[str]] = None) -> int:
     except DuckielibError as error:
         print(f"duckie: {error}", file=sys.stderr)
         return 1
+    except BrokenPipeError:
+        # The reader went away (`duckie bag info run.bag | head`): that is not an error of
+        # ours. Point stdout at /dev/null so Python's own flush at exit stays quiet too.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141  # as a shell reports a command ended by SIGPIPE
     except Exception:
         if not pressed:
             raise

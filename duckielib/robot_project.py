@@ -41,13 +41,25 @@ from duckielib.solution import (
     reference_solution_dir,
 )
 
-__all__ = ["ROOT", "PROJECT", "ROBOT_PYTHON", "Prepared", "prepare", "robot_module_files"]
+__all__ = [
+    "GENERATED",
+    "PROJECT",
+    "ROBOT_PYTHON",
+    "ROOT",
+    "Prepared",
+    "prepare",
+    "robot_module_files",
+]
 
 #: The course's repository: the folder that holds ``duckielib/`` and ``pyproject.toml``.
 ROOT = Path(duckielib.__file__).resolve().parents[1]
 
 #: The Duckietown project for the robot.
 PROJECT = ROOT / "robot_nodes"
+
+#: The folders of a project that :func:`prepare` writes: the deployed files, and the new and
+#: the old ones while it swaps them.
+GENERATED = ("deploy", "deploy.tmp", "deploy.old")
 
 #: The Python the robot runs (ROS Noetic on Ubuntu 20.04).
 ROBOT_PYTHON = (3, 8)
@@ -211,7 +223,7 @@ def _message_packages(folder: Path) -> Optional[str]:
 
 def _swap(new: Path, deploy: Path) -> None:
     """Put ``new`` in the place of ``deploy``; the old one is removed only after the swap."""
-    old = deploy.with_name(deploy.name + ".old")
+    old = deploy.with_name(GENERATED[2])
     if old.exists():
         shutil.rmtree(old)
     if deploy.exists():
@@ -253,8 +265,7 @@ def prepare(
     _check_robot_python(source, "the reference solution" if solution is None else str(solution))
     robot_module_files()  # fails on a missing module before anything is written
 
-    deploy = project / "deploy"
-    new = project / "deploy.tmp"
+    deploy, new = project / GENERATED[0], project / GENERATED[1]
     if new.exists():
         shutil.rmtree(new)
     try:

@@ -8,6 +8,8 @@ import sys
 
 import pytest
 
+from autograder.course import ROOT
+
 FIGURE_LINE = re.compile(r"^[a-z0-9_]+: \S+$")
 
 
@@ -73,6 +75,26 @@ def test_mission_refuses_an_unknown_mission_with_usage():
     result = duckie("mission", "--mission", "circle")
     assert result.returncode == 2
     assert "invalid choice: 'circle'" in result.stderr
+
+
+@pytest.mark.parametrize("exported", [False, True])
+def test_an_unfinished_solution_stops_the_mission_at_once_naming_the_first_notebook(
+    tmp_path, exported
+):
+    # The untouched release, as a folder of notebooks or exported into one module: either way
+    # the run stops before it starts, with the same sentence, and writes nothing.
+    solution = str(ROOT / "course")
+    if exported:
+        solution = str(tmp_path / "mine.py")
+        assert duckie("export", str(ROOT / "course"), "-o", solution).returncode == 0
+    result = duckie("mission", "--solution", solution, "--out", str(tmp_path / "run"))
+    assert result.returncode == 1
+    assert result.stderr == (
+        "duckie: Finish notebook 05_odometry: write delta_phi, estimate_pose, WheelPairing "
+        "(their cells still raise NotImplementedError), save the notebook, and try again.\n"
+    )
+    assert result.stdout == ""
+    assert not (tmp_path / "run").exists()
 
 
 def test_bad_command_line_exits_2_with_usage():

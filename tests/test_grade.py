@@ -6,6 +6,7 @@ import csv
 import html
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -16,8 +17,10 @@ import nbformat
 import pytest
 
 from autograder.course import ROOT
-from autograder.grade import grade_class
+from autograder.execute import NOT_RUN
+from autograder.grade import grade_class, raised_outside_tests
 from autograder.sandbox import NOBODY, Limits, check_sandbox, sandboxed_command
+from duckielib import robot_project
 
 pytestmark = pytest.mark.slow
 
@@ -71,6 +74,26 @@ def test_the_sandbox_hides_the_course_and_the_grader(sandbox, tmp_path):
         result.stderr
     )
     assert (tmp_path / "box" / "mine.txt").read_text() == "ok"
+
+
+def test_the_sandbox_shows_the_robot_project_but_not_a_prepared_solution(
+    sandbox, tmp_path, monkeypatch
+):
+    # Notebook 11 reads the robot project; `duckie robot prepare` may have written the
+    # reference solution into its deploy/ folder on the grader's machine.
+    project = tmp_path / "robot_nodes"
+    (project / "deploy").mkdir(parents=True)
+    (project / "Dockerfile").write_text("FROM duckietown\n")
+    (project / "deploy" / "solution.py").write_text("ANSWERS = 42\n")
+    monkeypatch.setattr(robot_project, "PROJECT", project)
+    code = (
+        "import pathlib\n"
+        f"project = pathlib.Path({str(project)!r})\n"
+        "print((project / 'Dockerfile').read_text().strip())\n"
+        "print((project / 'deploy' / 'solution.py').exists())\n"
+    )
+    result = run_inside(tmp_path, code)
+    assert result.stdout.splitlines() == ["FROM duckietown", "False"], result.stderr
 
 
 def test_the_sandbox_limits_memory_and_processes(sandbox, tmp_path):
@@ -136,6 +159,11 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
     assert cy["test_wrap_angle"] == 0
     assert cy["test_rotation_matrix"] > 0
     assert by_name["dee"].problems == [f"{ASSIGNMENT}: no {ASSIGNMENT}.ipynb in the submission"]
+    # The release's demo cells call the unwritten functions: each is named; its tests are not.
+    assert not [problem for problem in by_name["ada"].problems if "raised" in problem]
+    (raised,) = by_name["ben"].problems
+    assert "): NotImplementedError" in raised
+    _check_raised(raised, tmp_path / "out", "ben")
     assert len(lines) == 4
     assert lines[-1].startswith("4/4 graded")
     with (tmp_path / "out" / "grades.csv").open() as handle:
@@ -167,6 +195,88 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
         assert not [line for line in hidden if html.escape(line) in page]
 
 
+def _check_raised(problem: str, out: Path, student: str) -> None:
+    """``problem`` names exactly the cells outside the tests whose run raised, none twice."""
+    path = out / "work" / "autograded" / student / ASSIGNMENT / f"{ASSIGNMENT}.ipynb"
+    cells = nbformat.read(path, 4).cells
+    tests = [i for i, cell in enumerate(cells, 1) if cell.metadata.get("nbgrader", {}).get("grade")]
+    raised = [
+        i
+        for i, cell in enumerate(cells, 1)
+        if i not in tests and any(o.output_type == "error" for o in cell.get("outputs", []))
+    ]
+    # The release's test cells raise (NotImplementedError): they are failed tests only.
+    assert [i for i in tests if any(o.output_type == "error" for o in cells[i - 1].outputs)]
+    named = [int(number) for number in re.findall(r"(?:: |; )cell (\d+) \(", problem)]
+    assert named == raised, problem
+    assert problem.startswith(f"{ASSIGNMENT}: {len(raised)} cells outside the tests raised: ")
+
+
+def test_duckie_grade_names_the_cells_outside_the_tests_that_raised_without_a_sandbox(tmp_path):
+    """The real command, without bubblewrap: the class's CSV and the feedback page say it."""
+    submissions, out = tmp_path / "submissions", tmp_path / "out"
+    _submission(submissions, "fay", ROOT / "course", edit=_stray_cell)
+    command = [sys.executable, "-m", "duckielib.cli", "grade", str(submissions), "--out"]
+    command += [str(out), "--assignment", ASSIGNMENT, "--no-driving", "--no-sandbox"]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=300, check=False)
+    assert result.returncode == 0, result.stdout + result.stderr
+    with (out / "grades.csv").open() as handle:
+        (row,) = csv.DictReader(handle)
+    (problem,) = row["problems"].split(" | ")
+    # The stray cell went in as the third cell; the release's demo cells raise after it.
+    stray = "cell 3 (print(undefined_name)  # a stray line): NameError: name 'undefined_name'"
+    assert f": {stray} is not defined; cell " in problem
+    _check_raised(problem, out, "fay")
+    assert html.escape(problem) in (out / "feedback" / "fay.html").read_text()
+
+
+def _stray_cell(notebook) -> None:
+    notebook.cells.insert(2, nbformat.v4.new_code_cell("\nprint(undefined_name)  # a stray line\n"))
+
+
+def _error(ename: str, evalue: str):
+    return nbformat.v4.new_output("error", ename=ename, evalue=evalue, traceback=["the trace"])
+
+
+def test_every_raising_cell_is_named_once_and_tests_and_cells_not_run_are_left_out():
+    test = nbformat.v4.new_code_cell("assert f() == 1", metadata={"nbgrader": {"grade": True}})
+    sent = nbformat.v4.new_notebook(
+        cells=[
+            nbformat.v4.new_markdown_cell("# A title"),
+            nbformat.v4.new_code_cell(
+                "\n   \n    value = compute_something_with_a_rather_long_name(1, 2, 3)"
+            ),
+            test,
+            nbformat.v4.new_code_cell("plot(value)"),
+            nbformat.v4.new_code_cell("after_the_crash()"),
+            nbformat.v4.new_code_cell("while True:\n    pass"),
+        ]
+    )
+    executed = nbformat.reads(nbformat.writes(sent), as_version=4)
+    outputs = [
+        [],
+        [_error("\x1b[0;31mValueError\x1b[0m", "a message\non two lines " + "x" * 200)],
+        [_error("AssertionError", "f() should be 1")],
+        [nbformat.v4.new_output("stream", text="fine"), _error("NameError", "no 'value'")],
+        [_error(NOT_RUN, "This cell did not run: the kernel died.")],
+        [_error("CellTimeoutError", "")],
+    ]
+    for cell, cell_outputs in zip(executed.cells, outputs):
+        if cell.cell_type == "code":
+            cell.outputs = cell_outputs
+    # A student cannot make a cell a test: which cells are tests is read from what was sent.
+    executed.cells[3].metadata["nbgrader"] = {"grade": True}
+    problem = raised_outside_tests("07_control", sent, executed, cell_seconds=5)
+    assert problem == (
+        "07_control: 3 cells outside the tests raised: "
+        "cell 2 (value = compute_something_with_a_rather_long_name…): ValueError: a message "
+        f"on two lines {'x' * 96}…; "
+        "cell 4 (plot(value)): NameError: no 'value'; "
+        "cell 6 (while True:): CellTimeoutError: still running after the 5 s a cell may take"
+    )
+    assert raised_outside_tests("07_control", sent, sent) is None
+
+
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):
     result = subprocess.run(
         [sys.executable, "-m", "duckielib.cli", "grade", str(tmp_path / "nope"), "--out", "x"],
@@ -190,6 +300,8 @@ def test_notebooks_linked_to_the_reference_are_neither_graded_nor_driven(sandbox
     )
     assert {path: path.read_bytes() for path in before} == before, "a link was written through"
     assert result.total == 0
-    assert result.problems == [f"{ASSIGNMENT}: the notebook is a link; the release was graded"]
+    linked, raised = result.problems
+    assert linked == f"{ASSIGNMENT}: the notebook is a link; the release was graded"
+    assert raised.startswith(f"{ASSIGNMENT}: 5 cells outside the tests raised:")
     assert result.driving.score == 0
     assert result.driving.reasons[0].startswith("The mission could not run: Finish notebook")

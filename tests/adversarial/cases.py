@@ -121,6 +121,10 @@ CASES: Dict[str, Case] = {
         cell="import sys\nimport warnings\n\nprint('a message on stderr', file=sys.stderr)\n"
         "warnings.warn('a warning')\n"
     ),
+    "raises_outside_tests": Case(
+        cell="print(undefined_name)\n",
+        answers={"wrap_angle": "def wrap_angle(theta):\n    return theta\n"},
+    ),
     "malformed": Case(raw='{"cells": [ this is not a notebook'),
     "empty": Case(empty=True),
 }
@@ -133,6 +137,7 @@ def expected_loss(name: str) -> Tuple[str, ...]:
         "kernel_crash": ("*",),
         "monkey_patch": ("test_wrap_angle", "test_rotation_matrix"),
         "shadow_numpy": ("test_rotation_matrix",),
+        "raises_outside_tests": ("test_wrap_angle",),
         "malformed": ("*",),
         "empty": ("*",),
     }.get(name, ())

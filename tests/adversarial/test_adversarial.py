@@ -6,6 +6,8 @@ lose, the problem reported), every other student graded normally, and the gradeb
 
 from __future__ import annotations
 
+import csv
+import html
 import json
 import shutil
 import sqlite3
@@ -131,11 +133,40 @@ def test_a_well_behaved_student_in_the_same_class_gets_full_marks(graded):
         ("monkey_patch", "math.isclose"),
         ("malformed", "not a readable notebook"),
         ("empty", "no 03_frames.ipynb"),
+        ("sys_exit", "SystemExit"),
+        ("infinite_loop", "CellTimeoutError: still running after the 5 s a cell may take"),
+        ("raises_outside_tests", "NameError"),
     ],
 )
 def test_the_instructor_is_told_what_happened(graded, name, words):
     results, _, _ = graded
     assert any(words in problem for problem in results[name].problems), results[name].problems
+
+
+def test_a_cell_outside_the_tests_that_raised_is_named_with_its_error(graded):
+    results, out, _ = graded
+    path = out / "work" / "autograded" / "raises_outside_tests" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb"
+    cells = nbformat.read(path, 4).cells
+    (stray,) = [i for i, cell in enumerate(cells, 1) if cell.source == "print(undefined_name)\n"]
+    (failed,) = [cell for cell in cells if _grade_id(cell) == "test_wrap_angle"]
+    assert [o["ename"] for o in failed.outputs if o.output_type == "error"] == ["AssertionError"]
+    # One sentence, naming the cell by position and first line, and the error; the failing
+    # test cell (which raised too) is a failed test, not this problem.
+    wanted = (
+        f"{ASSIGNMENT}: 1 cell outside the tests raised: cell {stray} (print(undefined_name)): "
+        "NameError: name 'undefined_name' is not defined"
+    )
+    assert [p for p in results["raises_outside_tests"].problems if "raised" in p] == [wanted]
+    with (out / "grades.csv").open() as handle:
+        rows = {row["student"]: row for row in csv.DictReader(handle)}
+    assert rows["raises_outside_tests"]["problems"] == wanted
+    page = (out / "feedback" / "raises_outside_tests.html").read_text()
+    assert html.escape(wanted) in page
+    # Cells the dead kernel never ran are not reported again as raising.
+    for name in ("os_exit", "kernel_crash"):
+        assert not [p for p in results[name].problems if "outside the tests" in p], name
+    assert rows["reference"]["problems"] == ""
+    assert "outside the tests" not in (out / "feedback" / "reference.html").read_text()
 
 
 def test_the_monkey_patches_were_undone_before_the_tests(graded):

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from bagtools import write_encoders
 
-from duckielib.bags import BagWriter
+from duckielib.bags import BagWriter, sample_bag
 from duckielib.messages import Pose2DStamped, String
 
 S = 1_000_000_000
@@ -118,3 +118,18 @@ def test_bad_input_gets_one_line_and_status_1(tmp_path, encoders):
     assert_one_line_error(
         duckie("odometry", encoders, "--solution", SOLUTION, "--left", "/nope"), "no topic /nope"
     )
+
+
+def test_info_into_a_reader_that_stops_early_ends_quietly():
+    # `duckie bag info run.bag | head -1`: the reader is gone before duckie writes.
+    process = subprocess.Popen(
+        [sys.executable, "-m", "duckielib.cli", "bag", "info", str(sample_bag())],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    process.stdout.close()
+    errors = process.stderr.read()
+    process.stderr.close()
+    assert process.wait(timeout=120) == 141
+    assert errors == ""
