@@ -18,6 +18,7 @@ import inspect
 import json
 import linecache
 import sys
+import textwrap
 import types
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +34,7 @@ __all__ = [
     "SolutionError",
     "call_part",
     "check_part",
+    "check_saved",
     "export_solution",
     "load_solution",
     "reference_solution_dir",
@@ -499,6 +501,39 @@ def _module_from_source(source: str, filename: str) -> types.ModuleType:
     return module
 
 
+def _refuse_unfinished(required: Iterable[str], unfinished: Iterable[str]) -> None:
+    """Stop at the first required part still unwritten, naming its notebook."""
+    waiting_parts = [name for name in CONTRACT if name in set(unfinished) & set(required)]
+    if waiting_parts:
+        first = CONTRACT[waiting_parts[0]]
+        waiting = [name for name in waiting_parts if CONTRACT[name].notebook == first.notebook]
+        raise SolutionError(
+            f"{_finish(first)}: write {', '.join(waiting)} (their cells still raise "
+            "NotImplementedError), save the notebook, and try again."
+        )
+
+
+def _unfinished_in_module(source: str) -> List[str]:
+    """The contract parts a solution module defines but leaves unwritten.
+
+    The last definition of a name counts, as when the module runs.
+    """
+    try:
+        tree = ast.parse(source)
+    except SyntaxError:
+        return []  # the import says what is wrong, with the line
+    definitions = {
+        node.name: node
+        for node in tree.body
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and node.name in CONTRACT
+    }
+    return [
+        name
+        for name, node in definitions.items()
+        if _check_definition(CONTRACT[name], node, CONTRACT[name].notebook)[0]
+    ]
+
+
 def load_solution(
     path: Union[str, Path, None] = None, required: Iterable[str] = ODOMETRY_PARTS
 ) -> types.ModuleType:
@@ -524,14 +559,7 @@ def load_solution(
             notebook = CONTRACT[name].notebook
             if name not in export.found and notebook in export.broken:
                 raise SolutionError(export.broken[notebook])
-        unfinished = [name for name in required if name in export.unfinished]
-        if unfinished:
-            first = CONTRACT[unfinished[0]]
-            waiting = [name for name in unfinished if CONTRACT[name].notebook == first.notebook]
-            raise SolutionError(
-                f"{_finish(first)}: write {', '.join(waiting)} (their cells still raise "
-                "NotImplementedError), save the notebook, and try again."
-            )
+        _refuse_unfinished(required, export.unfinished)
         module = _module_from_source(export.source, f"<solution exported from {folder}>")
     elif folder.is_file():
         if folder.suffix == ".ipynb":
@@ -539,6 +567,7 @@ def load_solution(
                 f"{folder} is one notebook; give the folder that holds your notebooks."
             )
         source = folder.read_text(encoding="utf-8")
+        _refuse_unfinished(required, _unfinished_in_module(source))
         module = _module_from_source(source, str(folder))
     else:
         raise SolutionError(f"There is no solution file or folder {folder}.")
@@ -611,3 +640,46 @@ def call_part(name: str, function: Callable[..., Any], *args: Any) -> Any:
             f"{name}({arguments}), from notebook {part.notebook}, raised "
             f"{type(error).__name__}: {error}"
         ) from error
+
+
+def _definition_ast(source: str, name: str) -> Any:
+    """The last top-level ``def``/``class`` called ``name`` in ``source``, as an AST dump."""
+    found = None
+    for node in ast.parse(textwrap.dedent(source)).body:
+        if isinstance(node, (ast.FunctionDef, ast.ClassDef)) and node.name == name:
+            found = ast.dump(node)
+    return found
+
+
+def check_saved(solution: Any, *defined_here: Any) -> None:
+    """Check that parts a notebook defines are the ones its saved file gives the solution.
+
+    Tests that run a student's nodes load the solution from the saved notebooks, exactly as
+    ``duckie mission`` and the robot do. A part edited in the notebook but not saved yet would
+    then be tested in its old version: this says so instead. Formatting and comments do not
+    count, only the code.
+
+    Args:
+        solution: the loaded solution (:func:`load_solution`).
+        defined_here: the functions or classes as the notebook defines them now.
+
+    Raises:
+        SolutionError: naming the first part whose saved version differs.
+    """
+    for mine in defined_here:
+        name = getattr(mine, "__name__", "")
+        part = CONTRACT.get(name)
+        saved = getattr(solution, name, None)
+        if part is None or saved is None:
+            continue
+        try:
+            here = _definition_ast(inspect.getsource(mine), name)
+            there = _definition_ast(inspect.getsource(saved), name)
+        except (OSError, TypeError, SyntaxError):
+            continue  # not defined in a cell (or not found): nothing to compare
+        if here != there:
+            raise SolutionError(
+                f"{name} in this notebook differs from the one saved in notebook "
+                f"{part.notebook}: save the notebook (Ctrl+S) and run this cell again. Tests, "
+                "duckie mission and the robot all run your saved notebooks."
+            )

@@ -163,10 +163,10 @@ class PID:
     module = tmp_path / "mine.py"
     module.write_text(export_solution(reference_solution_dir()).source + unwritten_pid)
     out = tmp_path / "run"
-    with pytest.raises(SolutionError, match=r"^Finish notebook 07_control: PID is not written"):
+    # As for a folder of notebooks: the run stops before it starts, naming what to write.
+    with pytest.raises(SolutionError, match=r"^Finish notebook 07_control: write PID \("):
         run_mission(str(module), out=out, animation=False)
-    assert not (out / "summary.json").exists()
-    assert Bag(out / "mission.bag").message_count > 0  # closed and readable
+    assert not out.exists()
 
 
 def test_a_mission_that_never_ends_is_stopped_with_a_sentence(reference, tmp_path):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import linecache
 import math
 import subprocess
 import sys
@@ -11,7 +12,13 @@ import pytest
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
 from duckielib.odometry import Odometry
-from duckielib.solution import CONTRACT, SolutionError, export_solution, load_solution
+from duckielib.solution import (
+    CONTRACT,
+    SolutionError,
+    check_saved,
+    export_solution,
+    load_solution,
+)
 
 DELTA_PHI = '''import math
 
@@ -257,3 +264,38 @@ def test_a_broken_later_notebook_does_not_keep_earlier_parts_from_loading(tmp_pa
     assert module.delta_phi(135, 0, 135)[0] == pytest.approx(2 * math.pi)
     with pytest.raises(SolutionError, match="exported cell 1 is not valid Python"):
         load_solution(folder, required=["mission_node"])
+
+
+def defined_in_a_cell(text, name, label="<cell 4>"):
+    """``name`` as a notebook cell of ``text`` defines it (IPython keeps a cell's lines)."""
+    linecache.cache[label] = (len(text), None, text.splitlines(True), label)
+    namespace = {"math": math}
+    exec(compile(text, label, "exec"), namespace)
+    return namespace[name]
+
+
+def test_check_saved_accepts_the_saved_part_and_names_an_unsaved_edit(tmp_path):
+    solution = load_solution(odometry_course(tmp_path / "course"))
+    # Formatting and comments do not count.
+    saved = defined_in_a_cell(
+        DELTA_PHI.replace("return 2", "# the angle\n    return  2"), "delta_phi"
+    )
+    check_saved(solution, saved)
+    edited = defined_in_a_cell(DELTA_PHI.replace("2 * math.pi", "math.pi"), "delta_phi", "<c5>")
+    with pytest.raises(SolutionError) as error:
+        check_saved(solution, edited)
+    assert str(error.value) == (
+        "delta_phi in this notebook differs from the one saved in notebook 05_odometry: save "
+        "the notebook (Ctrl+S) and run this cell again. Tests, duckie mission and the robot all "
+        "run your saved notebooks."
+    )
+    # Parts the solution lacks, names outside the contract and code without source are left.
+    check_saved(solution, edited.__class__, print, lambda ticks: ticks)
+
+
+def test_an_unfinished_part_in_an_exported_module_stops_the_load(tmp_path):
+    module = tmp_path / "mine.py"
+    module.write_text(export_solution(odometry_course(tmp_path / "c", delta=UNWRITTEN)).source)
+    with pytest.raises(SolutionError, match=r"^Finish notebook 05_odometry: write delta_phi \("):
+        load_solution(module)
+    assert load_solution(module, required=["estimate_pose"]).estimate_pose
