@@ -34,6 +34,7 @@ __all__ = [
     "Stop",
     "Straight",
     "TASK_START",
+    "describe_move",
     "mission_named",
 ]
 
@@ -80,6 +81,19 @@ class ReturnToStart:
 
 
 Move = Union[Stop, Rotate, Straight, Arc, ReturnToStart]
+
+
+def describe_move(move: Move) -> str:
+    """A move in a few words, with its numbers in units people read (degrees, metres)."""
+    if isinstance(move, Stop):
+        return f"stop {move.seconds:g} s"
+    if isinstance(move, Rotate):
+        return f"rotate {math.degrees(move.angle):+.0f}°"
+    if isinstance(move, Straight):
+        return f"straight {move.distance:g} m"
+    if isinstance(move, Arc):
+        return f"arc r={move.radius:g} m, {math.degrees(move.angle):+.0f}°"
+    return "back to the start"
 
 
 @dataclass(frozen=True)

@@ -326,7 +326,9 @@ def test_plots_imports_only_numpy_matplotlib_and_the_pure_modules():
         name
         for name in everywhere
         if name.split(".")[0] not in allowed_roots
-        and not name.startswith(("duckielib.config.", "duckielib.errors."))
+        and not name.startswith(
+            ("duckielib.config.", "duckielib.errors.", "duckielib.leds.", "duckielib.missions.")
+        )
     }
     assert outside == set()
     # pyplot (which picks a GUI backend) is imported only inside animate_path.
@@ -344,3 +346,53 @@ def test_save_animation_writes_a_whole_gif_or_refuses(tmp_path):
         plots.save_animation(anim, tmp_path / "run.mp4")
     with pytest.raises(DuckielibError, match="no folder"):
         plots.save_animation(anim, tmp_path / "missing" / "run.gif")
+
+
+def labels(ax):
+    """The texts drawn on ``ax``, arrows' (empty) labels left out."""
+    from matplotlib.text import Annotation
+
+    return [text.get_text() for text in ax.texts if not isinstance(text, Annotation)]
+
+
+def test_mission_states_are_boxes_in_their_led_colours_in_order():
+    from matplotlib.colors import to_rgb
+    from matplotlib.patches import Rectangle
+
+    from duckielib.leds import pattern_colors, pattern_named
+    from duckielib.missions import SQUARE_THEN_CIRCLE
+    from duckielib.plots import plot_mission_states
+
+    ax = plot_mission_states(SQUARE_THEN_CIRCLE)
+    boxes = [patch for patch in ax.patches if isinstance(patch, Rectangle)]
+    assert [box.get_x() for box in boxes] == sorted(box.get_x() for box in boxes)
+    assert [to_rgb(box.get_facecolor()) for box in boxes] == [
+        pattern_colors(pattern_named(state.color))[0] for state in SQUARE_THEN_CIRCLE.states
+    ]
+    texts = labels(ax)
+    assert "square\n(GREEN)\n\nrotate -90°\nstraight 1.25 m\nrotate +90°" in texts[2]
+    assert texts.count("after 5 s") == 3
+    assert texts[-1] == "done"
+
+
+def test_the_mission_nodes_and_the_topics_between_them():
+    from duckielib.plots import plot_mission_nodes
+
+    texts = labels(plot_mission_nodes())
+    assert "mission_node\n[yours: notebook 09]" in texts
+    for name in ("odometry_node/pose", "car_cmd_switch_node/cmd", "~state", "shutdown"):
+        assert name in texts
+
+
+def test_topic_ends_name_nobody_where_no_node_is():
+    from duckielib.plots import plot_topic_ends
+
+    ax = plot_topic_ends({"/bot/chatter": (["/bot/talker"], []), "/bot/cmd": ([], ["/a", "/b"])})
+    assert labels(ax) == [
+        "/bot/chatter",
+        "/bot/talker",
+        "(nobody)",
+        "/bot/cmd",
+        "(nobody)",
+        "/a\n/b",
+    ]

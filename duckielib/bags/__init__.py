@@ -10,6 +10,7 @@ Modules (one idea each):
     repair: :func:`repair_bag`, every complete message of a killed recording.
     records: the bag's records in file order, even from a damaged file.
     analysis: topics as arrays, odometry replayed from encoder ticks, pose tracks.
+    samples: :func:`sample_bag`, bags that come with the course.
 
 Example::
 
@@ -37,6 +38,7 @@ from duckielib.bags.analysis import (
 from duckielib.bags.io import Bag, BagMessage, BagWriter, TopicInfo, course_typestore
 from duckielib.bags.recorder import BagRecorder, record
 from duckielib.bags.repair import RepairReport, repair_bag
+from duckielib.bags.samples import SAMPLES, sample_bag
 
 __all__ = [
     "Bag",
@@ -46,6 +48,7 @@ __all__ = [
     "EncoderStream",
     "PoseTrack",
     "RepairReport",
+    "SAMPLES",
     "TopicArrays",
     "TopicInfo",
     "course_typestore",
@@ -56,4 +59,5 @@ __all__ = [
     "record",
     "repair_bag",
     "replay_odometry",
+    "sample_bag",
 ]

@@ -1,0 +1,39 @@
+"""The sample bag notebook 10 analyses until a student's own mission runs."""
+
+from __future__ import annotations
+
+import pytest
+
+from duckielib.bags import SAMPLES, Bag, sample_bag
+from duckielib.behaviour import mission_report
+from duckielib.errors import BagError
+from duckielib.missions import SQUARE_THEN_CIRCLE
+from duckielib.runner import run_mission
+
+
+def test_the_sample_is_a_whole_mission_that_passes_every_check():
+    assert SAMPLES == ["square_then_circle_realistic"]
+    report = mission_report(sample_bag(), SQUARE_THEN_CIRCLE)
+    assert [state.name for state in report.states] == [s.name for s in SQUARE_THEN_CIRCLE.states]
+    assert report.states_in_order
+    assert report.stops_held
+    assert report.finished
+    assert report.closed
+    assert report.problems == []
+
+
+@pytest.mark.slow
+def test_the_sample_holds_what_a_mission_run_records_today(tmp_path):
+    # Same topics, types and md5 sums as a fresh run: record it again when these change.
+    run = run_mission(noise="realistic", seed=0, out=tmp_path, animation=False)
+    fresh, sample = Bag(run.files["bag"]).topics, Bag(sample_bag()).topics
+    assert {name: (info.type, info.md5sum) for name, info in sample.items()} == {
+        name: (info.type, info.md5sum) for name, info in fresh.items()
+    }
+    ratio = {name: sample[name].count / fresh[name].count for name in fresh}
+    assert all(0.9 < value < 1.1 for value in ratio.values()), ratio
+
+
+def test_an_unknown_sample_is_named_with_those_there_are():
+    with pytest.raises(BagError, match=r"no sample bag 'd_shape'.*square_then_circle_realistic"):
+        sample_bag("d_shape")
