@@ -10,11 +10,13 @@ SUDO := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 # Jupyter refuses to run as root unless told; LAB_ARGS passes more options (--port=8890 ...).
 LAB_ROOT := $(shell [ "$$(id -u)" = 0 ] && echo --allow-root)
 LAB_ARGS ?=
+# The folder JupyterLab shows: the repository (its course/ opens first).
+LAB_DIR ?= $(CURDIR)
 
-# Debian's ROS 1 (rospy, roscore, rosbag, genpy, message packages) and bubblewrap, the sandbox
-# the autograder runs student code in.
+# Debian's ROS 1 (rospy, roscore, rosbag, genpy, message packages), bubblewrap, the sandbox
+# the autograder runs student code in, and Chromium, the browser the JupyterLab tests drive.
 ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-genpy \
-	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv
+	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv chromium
 
 .PHONY: help run test lab robot ros lint format bench lock clean
 
@@ -23,7 +25,7 @@ help:
 	@echo "make test    run the whole test suite"
 	@echo "make lab     start JupyterLab on the course notebooks"
 	@echo "make robot   ready robot_nodes/ for the robot (SOLUTION=course: with your notebooks)"
-	@echo "make ros     install Debian's ROS 1 packages and bubblewrap (needs apt, root or sudo)"
+	@echo "make ros     install Debian's ROS 1, bubblewrap and Chromium (needs apt, root or sudo)"
 	@echo "make lint    check and format the code with ruff"
 	@echo "make bench   list the benchmarks (run one with: .venv/bin/duckie bench NAME)"
 	@echo "make lock    refresh constraints.txt from the current environment"
@@ -42,9 +44,15 @@ run: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest
 
+# JupyterLab as students use it: the repository's files (the README among them) with course/
+# open, nbgrader's Validate button but not its instructor tools (duckielib/lab/ says which),
+# and the course's commands (duckie handin ...) in its terminals.
 lab: $(STAMP)
 	@test -d course || { echo "course/ has no released notebooks yet: see the README's status section."; exit 1; }
-	$(BIN)/jupyter lab --notebook-dir=course $(LAB_ROOT) $(LAB_ARGS)
+	PATH="$(CURDIR)/$(BIN):$$PATH" \
+	JUPYTER_CONFIG_PATH="$(CURDIR)/duckielib/lab$${JUPYTER_CONFIG_PATH:+:$$JUPYTER_CONFIG_PATH}" \
+		$(BIN)/jupyter lab --ServerApp.root_dir="$(LAB_DIR)" --LabApp.default_url=/lab/tree/course \
+		$(LAB_ROOT) $(LAB_ARGS)
 
 # The course library and a solution into robot_nodes/deploy/: the reference solution unless
 # told (make robot SOLUTION=course).

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import json
 import re
+import shutil
 from pathlib import Path
 
 from autograder.course import ROOT, assignments
@@ -87,3 +88,62 @@ def edited_reference(name: str, grade_id: str, edits, label: str) -> str:
 def load_solution_nb(name: str) -> dict:
     """A notebook of solutions/, read once (callers must not change it)."""
     return load(notebook_path(SOLUTIONS, name))
+
+
+MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
+
+
+def as_student(text: str) -> str:
+    """The reference code of a graded cell as a student would type it (no region markers)."""
+    return "\n".join(line for line in text.splitlines() if line.strip() not in MARKERS) + "\n"
+
+
+def reference_answers() -> dict:
+    """Every graded cell's reference code, as a student would type it: ``{(name, id): text}``."""
+    return {
+        (name, grade_id): as_student(source(cell))
+        for name in NAMES
+        for grade_id, cell in graded_cells(load_solution_nb(name)).items()
+    }
+
+
+def student_copy(folder, replacements):
+    """A copy of course/ in ``folder`` with graded cells replaced: ``{(name, grade_id): text}``."""
+    shutil.copytree(COURSE, folder)
+    for name in NAMES:
+        path = notebook_path(folder, name)
+        notebook = load(path)
+        for cell in notebook["cells"]:
+            grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+            if (name, grade_id) in replacements:
+                cell["source"] = replacements[(name, grade_id)]
+        path.write_text(json.dumps(notebook, indent=1) + "\n", encoding="utf-8")
+    return folder
+
+
+def too_early(run) -> str | None:
+    """Why Run All of an untouched released notebook stops before its first exercise, or None.
+
+    It may stop only at the first exercise: its own cell, the first test cell after it, or a
+    cell between the two that says in one sentence what to finish first (a ``SolutionError``
+    starting "Finish"). A notebook without exercises must run to the end.
+    """
+    stop = run.stops_at
+    if run.stopped is not None:
+        return f"{run.name}: {run.stopped}"
+    if stop is None:
+        return None
+    if not run.exercises:
+        return f"{run.name} has no exercise, yet Run All stops at {stop.describe()}"
+    first, number = next(iter(run.exercises.items()))
+    if stop.number < number:
+        return (
+            f"{run.name}: Run All stops at {stop.describe()}, before the first exercise "
+            f"({first}, cell {number}): what comes before it must run without it"
+        )
+    if stop.kind in ("exercise", "test") or stop.error.startswith("SolutionError: Finish"):
+        return None
+    return (
+        f"{run.name}: Run All stops at {stop.describe()}, after the first exercise ({first}) "
+        "but without saying which exercise to finish first"
+    )

@@ -8,18 +8,13 @@ deliberately wrong solution of every graded cell (see ``wrong_*.py``).
 
 from __future__ import annotations
 
-import json
-import shutil
-
 import pytest
 from coursetools import (
-    COURSE,
     NAMES,
-    graded_cells,
     load,
-    load_solution_nb,
     notebook_path,
-    source,
+    reference_answers,
+    student_copy,
     wrong_solutions,
 )
 
@@ -28,36 +23,11 @@ from duckielib.solution import CONTRACT, load_solution
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook, pytest.mark.timeout(1200)]
 
-MARKERS = ("### BEGIN SOLUTION", "### END SOLUTION")
-
-
-def as_student(text: str) -> str:
-    """The reference code of a graded cell as a student would type it (no region markers)."""
-    return "\n".join(line for line in text.splitlines() if line.strip() not in MARKERS) + "\n"
-
-
-def student_copy(folder, replacements):
-    """A copy of course/ in ``folder`` with graded cells replaced: ``{(name, grade_id): text}``."""
-    shutil.copytree(COURSE, folder)
-    for name in NAMES:
-        path = notebook_path(folder, name)
-        notebook = load(path)
-        for cell in notebook["cells"]:
-            grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
-            if (name, grade_id) in replacements:
-                cell["source"] = replacements[(name, grade_id)]
-        path.write_text(json.dumps(notebook, indent=1) + "\n", encoding="utf-8")
-    return folder
-
 
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     root = tmp_path_factory.mktemp("grading")
-    filled = {
-        (name, grade_id): as_student(source(cell))
-        for name in NAMES
-        for grade_id, cell in graded_cells(load_solution_nb(name)).items()
-    }
+    filled = reference_answers()
     first_mistakes = {}
     for (name, grade_id, _), text in wrong_solutions().items():
         first_mistakes.setdefault((name, grade_id), text)

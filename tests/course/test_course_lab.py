@@ -1,23 +1,34 @@
-"""``make lab`` opens the course: JupyterLab serves course/'s notebooks with a python3 kernel."""
+"""``make lab`` opens the course as a student meets it, checked over its API and in Chromium.
+
+The browser test drives Debian's Chromium with Playwright: it opens JupyterLab as ``make lab``
+starts it, on a copy of the course filled with the reference answers, runs notebook 07 with
+Run > Run All Cells, and checks that no cell shows an error, as a student would see it.
+"""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
+import re
+import shutil
 import signal
 import socket
 import subprocess
 import time
+import urllib.error
 import urllib.request
+from pathlib import Path
 
 import pytest
-from coursetools import NAMES
+from coursetools import NAMES, reference_answers, student_copy
 
 from autograder.course import ROOT
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook]
 
 TOKEN = "course-lab-test"
+CHROMIUM = Path("/usr/bin/chromium")
 
 
 def free_port():
@@ -29,15 +40,22 @@ def free_port():
 def get(port, path):
     url = f"http://127.0.0.1:{port}{path}?token={TOKEN}"
     with urllib.request.urlopen(url, timeout=5) as response:
-        return json.loads(response.read())
+        return response.read().decode()
 
 
-def test_jupyterlab_serves_the_course_with_a_python3_kernel(tmp_path):
+@contextlib.contextmanager
+def lab(tmp_path, root=None):
+    """JupyterLab as `make lab` starts it (on ``root`` instead of the repository, if given)."""
     port = free_port()
-    env = {**os.environ, "JUPYTER_RUNTIME_DIR": str(tmp_path), "JUPYTER_CONFIG_DIR": str(tmp_path)}
+    env = {
+        **os.environ,
+        "JUPYTER_RUNTIME_DIR": str(tmp_path / "runtime"),
+        "JUPYTER_CONFIG_DIR": str(tmp_path / "config"),
+    }
     options = f"--no-browser --port={port} --ip=127.0.0.1 --IdentityProvider.token={TOKEN}"
+    folder = [] if root is None else [f"LAB_DIR={root}"]
     server = subprocess.Popen(
-        ["make", "--no-print-directory", "lab", f"LAB_ARGS={options}"],
+        ["make", "--no-print-directory", "lab", f"LAB_ARGS={options}", *folder],
         cwd=ROOT,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
@@ -48,16 +66,97 @@ def test_jupyterlab_serves_the_course_with_a_python3_kernel(tmp_path):
         deadline = time.monotonic() + 60
         while True:
             try:
-                listing = get(port, "/api/contents")
+                get(port, "/api/status")
                 break
             except OSError:
                 assert time.monotonic() < deadline, "JupyterLab did not start within 60 s"
                 time.sleep(0.5)
-        assert sorted(item["name"] for item in listing["content"]) == NAMES
-        first = get(port, f"/api/contents/{NAMES[0]}")
-        assert [item["name"] for item in first["content"]] == [f"{NAMES[0]}.ipynb"]
-        assert "python3" in get(port, "/api/kernelspecs")["kernelspecs"]
-        assert "@jupyterlab" in json.dumps(get(port, "/lab/api/settings"))
+        yield port
     finally:
         os.killpg(server.pid, signal.SIGTERM)
         server.wait(timeout=30)
+
+
+def test_jupyterlab_serves_the_course_without_the_instructor_tools(tmp_path):
+    with lab(tmp_path) as port:
+        root = {item["name"] for item in json.loads(get(port, "/api/contents"))["content"]}
+        assert {"course", "README.md"} <= root
+        listing = json.loads(get(port, "/api/contents/course"))["content"]
+        assert sorted(item["name"] for item in listing) == NAMES
+        assert "python3" in json.loads(get(port, "/api/kernelspecs"))["kernelspecs"]
+        page = get(port, "/lab")
+        config = re.search(r'id="jupyter-config-data"[^>]*>(.*?)</script>', page, re.S)
+        disabled = set(json.loads(config.group(1))["disabledExtensions"])
+        for plugin in ("formgrader", "create-assignment", "assignment-list", "course-list"):
+            assert f"@jupyter/nbgrader:{plugin}" in disabled  # instructors' tools
+        assert "@jupyter/nbgrader:validate-assignment" not in disabled
+        with pytest.raises(urllib.error.HTTPError, match="404"):
+            get(port, "/formgrader")
+
+
+@pytest.fixture(scope="module")
+def browser():
+    if not CHROMIUM.exists():
+        pytest.skip("Chromium is not installed; install it with `make ros`.")
+    playwright = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
+    with playwright.sync_playwright() as driver:
+        chromium = driver.chromium.launch(
+            executable_path=str(CHROMIUM),
+            args=[
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--no-first-run",
+            ],
+        )
+        yield chromium
+        chromium.close()
+
+
+def run_all_in_the_browser(page, port, name):
+    """Open a notebook of course/, Run > Run All Cells, wait until the kernel is idle again."""
+    page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?token={TOKEN}")
+    idle = ".jp-Notebook-ExecutionIndicator[data-status='idle']"
+    page.wait_for_selector(idle, timeout=60_000)
+    page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
+    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='busy']", timeout=30_000)
+    page.wait_for_selector(idle, timeout=120_000)
+
+
+def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, browser):
+    # Notebook 07 once raised in 9 cells under Run All while every other check passed.
+    root = tmp_path / "student"
+    student_copy(root / "course", reference_answers())
+    shutil.copy(ROOT / "README.md", root / "README.md")
+    with lab(tmp_path, root) as port:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(f"http://127.0.0.1:{port}/lab?token={TOKEN}")
+        page.wait_for_selector(".jp-DirListing-item", timeout=60_000)
+        menus = page.locator(".lm-MenuBar-itemLabel").all_inner_texts()
+        assert "Nbgrader" not in menus  # no instructor tools, no assignment list
+        run_all_in_the_browser(page, port, "07_control")
+        shown = page.locator(".jp-RenderedText[data-mime-type='application/vnd.jupyter.stderr']")
+        assert shown.all_inner_texts() == [], "cells of 07_control showed errors"
+        assert page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate").count() == 1
+        # What JupyterLab ran, saved as the student would save it: every cell, no error.
+        page.keyboard.press("Control+s")
+        path = root / "course" / "07_control" / "07_control.ipynb"
+        deadline = time.monotonic() + 30
+        while not any(cell.get("outputs") for cell in json.loads(path.read_text())["cells"]):
+            assert time.monotonic() < deadline, "the notebook was not saved within 30 s"
+            time.sleep(0.5)
+        code = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
+        assert [i for i, c in enumerate(code) if c["execution_count"] is None] == []
+        raised = [o["ename"] for c in code for o in c["outputs"] if o["output_type"] == "error"]
+        assert raised == []
+
+        # Notebook 01 links the README: it opens in JupyterLab from the notebook.
+        page.goto(
+            f"http://127.0.0.1:{port}/lab/tree/course/01_getting_started/"
+            f"01_getting_started.ipynb?token={TOKEN}"
+        )
+        page.locator(".jp-RenderedMarkdown a", has_text="README").first.click()
+        page.wait_for_selector(".lm-TabBar-tabLabel:text-is('README.md')", timeout=30_000)

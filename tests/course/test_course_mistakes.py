@@ -1,17 +1,23 @@
 """Every deliberately wrong solution fails the test cell of its function, hidden tests included.
 
 Fast and in-process: a notebook's import cell, the cells that load the student's earlier work
-(``load_solution("..")``, run from the notebook's folder, so they load the reference), then
-its graded and test cells in order (the reference code, with one cell replaced by a wrong one),
-as nbgrader runs them. The real
-nbgrader run of the first mistake of each cell is in ``test_course_autograde.py``.
+(``load_solution("..")``), then its graded and test cells in order (the reference code, with
+one cell replaced by a wrong one), as nbgrader runs them. They run from the notebook's folder in
+a copy of the course whose notebook holds the wrong cell, so a test that loads the student's
+saved notebooks loads the wrong cell too. The real nbgrader run of the first mistake of each
+cell is in ``test_course_autograde.py``.
 """
 
 from __future__ import annotations
 
+import ast
 import contextlib
+import copy
 import io
+import json
+import linecache
 import os
+import tempfile
 from pathlib import Path
 
 import pytest
@@ -22,6 +28,37 @@ from duckielib.ros import uninstall_modules
 MISTAKES = wrong_solutions()
 
 
+def run_cell(text, label, namespace):
+    """Run a cell's text as IPython does, its lines kept where ``inspect.getsource`` finds them."""
+    linecache.cache[label] = (len(text), None, text.splitlines(True), label)
+    exec(compile(text, label, "exec"), namespace)
+
+
+def copy_with(folder, name, replacements):
+    """The course's notebooks in ``folder``, ``name``'s graded cells replaced: its folder there.
+
+    Tests that load the student's saved notebooks (``load_solution("..")``) then read the
+    replaced cells, as they would in a student's folder.
+    """
+    for other in NAMES:
+        (folder / other).mkdir()
+        notebook = load_solution_nb(other)
+        if other == name:
+            notebook = copy.deepcopy(notebook)
+            for cell in notebook["cells"]:
+                grade_id = nbgrader(cell).get("grade_id")
+                if grade_id in replacements:
+                    cell["source"] = replacements[grade_id]
+        (folder / other / f"{other}.ipynb").write_text(json.dumps(notebook), encoding="utf-8")
+    return folder / name
+
+
+def loads_earlier_work(text):
+    """Whether a cell only loads the student's earlier work: assignments, one of them a load."""
+    body = ast.parse(text).body
+    return "load_solution(" in text and all(isinstance(node, ast.Assign) for node in body)
+
+
 def failing_checks(name, replacements=None):
     """Run a notebook's graded and test cells; the test cells' grade ids that fail."""
     replacements = replacements or {}
@@ -30,23 +67,27 @@ def failing_checks(name, replacements=None):
     failing = []
     environment = dict(os.environ)
     folder = Path.cwd()
+    scratch = tempfile.TemporaryDirectory(prefix="mistakes-")
     try:
-        os.chdir(SOLUTIONS / name)
+        os.chdir(
+            copy_with(Path(scratch.name), name, replacements) if replacements else SOLUTIONS / name
+        )
         with contextlib.redirect_stdout(io.StringIO()):
-            exec(compile(source(cells[0]), f"{name}[imports]", "exec"), namespace)
+            run_cell(source(cells[0]), f"<{name}[imports]>", namespace)
             for cell in cells[1:]:
                 meta = nbgrader(cell)
                 if not meta:
-                    if "load_solution(" in source(cell):
-                        exec(compile(source(cell), f"{name}[earlier work]", "exec"), namespace)
+                    if loads_earlier_work(source(cell)):
+                        run_cell(source(cell), f"<{name}[earlier work]>", namespace)
                     continue
                 text = replacements.get(meta["grade_id"], source(cell))
                 try:
-                    exec(compile(text, f"{name}[{meta['grade_id']}]", "exec"), namespace)
+                    run_cell(text, f"<{name}[{meta['grade_id']}]>", namespace)
                 except Exception:
                     failing.append(meta["grade_id"])
     finally:
         os.chdir(folder)
+        scratch.cleanup()
         # A notebook may alias rospy and the message packages, or set VEHICLE_NAME: undo both
         # so the tests that follow see the real modules and environment.
         uninstall_modules()
