@@ -115,6 +115,15 @@ def browser():
         chromium.close()
 
 
+FINISHED = """() => {
+    const prompts = [...document.querySelectorAll('.jp-Notebook .jp-CodeCell .jp-InputPrompt')]
+        .map((prompt) => prompt.textContent.trim());
+    if (prompts.length === 0 || prompts.some((prompt) => prompt.includes('*'))) return false;
+    const stderr = ".jp-RenderedText[data-mime-type='application/vnd.jupyter.stderr']";
+    return prompts.every((prompt) => /\\[\\d+\\]/.test(prompt)) || !!document.querySelector(stderr);
+}"""
+
+
 def run_all_in_the_browser(page, port, name):
     """Open a notebook of course/, Run > Run All Cells, wait until the kernel is idle again."""
     page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?token={TOKEN}")
@@ -122,8 +131,8 @@ def run_all_in_the_browser(page, port, name):
     page.wait_for_selector(idle, timeout=60_000)
     page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
     page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
-    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='busy']", timeout=30_000)
-    page.wait_for_selector(idle, timeout=120_000)
+    # Done when no cell waits ([*]) and every cell has run, or one raised (Run All stops there).
+    page.wait_for_function(FINISHED, timeout=180_000)
 
 
 def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, browser):

@@ -10,35 +10,54 @@ holding only the notebooks:
 - the untouched release: Run All may stop only at the notebook's first exercise (its cell, its
   test cell, or a cell that says which exercise to finish first). What comes before it
   (explanations, diagrams, listings) must not need later exercises or other notebooks.
+
+The filled and the untouched release are checked through ``duckie handin``, as a student who
+finished the course and one who has not started would hand them in.
 """
 
 from __future__ import annotations
 
+import zipfile
+
 import pytest
 from coursetools import COURSE, NAMES, SOLUTIONS, reference_answers, student_copy, too_early
 
-from duckielib.handin import check_course
+from duckielib.handin import check_course, handin
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook, pytest.mark.timeout(1500)]
 
 
-def runs_of(folder):
-    return {run.name: run for run in check_course(folder).runs}
+def runs_of(check):
+    return {run.name: run for run in check.runs}
+
+
+def handed_in(folder, zip_path):
+    """``duckie handin``'s check of a whole course, and the notebooks of the zip it wrote."""
+    check = handin(folder, zip_path)
+    with zipfile.ZipFile(zip_path) as archive:
+        assert sorted(archive.namelist()) == [f"{name}/{name}.ipynb" for name in NAMES]
+        for name in NAMES:
+            data = (folder / name / f"{name}.ipynb").read_bytes()
+            assert archive.read(f"{name}/{name}.ipynb") == data
+    return runs_of(check)
 
 
 @pytest.fixture(scope="module")
 def source_runs():
-    return runs_of(SOLUTIONS)
+    return runs_of(check_course(SOLUTIONS))
 
 
 @pytest.fixture(scope="module")
 def filled_runs(tmp_path_factory):
-    return runs_of(student_copy(tmp_path_factory.mktemp("run_all") / "filled", reference_answers()))
+    # A student who finished the course, handing it in.
+    root = tmp_path_factory.mktemp("run_all")
+    return handed_in(student_copy(root / "filled", reference_answers()), root / "filled.zip")
 
 
 @pytest.fixture(scope="module")
-def untouched_runs():
-    return runs_of(COURSE)
+def untouched_runs(tmp_path_factory):
+    # A student who has not started, handing in the course as it was released.
+    return handed_in(COURSE, tmp_path_factory.mktemp("run_all") / "untouched.zip")
 
 
 def raised(run):
@@ -66,3 +85,24 @@ def test_each_filled_release_notebook_runs_clean_under_run_all(filled_runs, name
 def test_the_untouched_release_stops_only_at_its_first_exercise(untouched_runs, name):
     run = untouched_runs[name]
     assert too_early(run) is None, too_early(run)
+
+
+def test_handin_says_what_is_unfinished_in_an_untouched_course(untouched_runs):
+    assert untouched_runs["05_odometry"].unfinished == [
+        "delta_phi",
+        "estimate_pose",
+        "WheelPairing",
+    ]
+    assert (
+        untouched_runs["01_getting_started"]
+        .summary()
+        .startswith(
+            "01_getting_started: 0 of 1 visible tests pass (to do: wheel_circumference); "
+            "Run All stops at cell 15 (test_wheel_circumference): NotImplementedError"
+        )
+    )
+    assert not any(run.clean for run in untouched_runs.values())
+
+
+def test_handin_finds_nothing_left_in_a_finished_course(filled_runs):
+    assert [run.name for run in filled_runs.values() if run.unfinished or not run.clean] == []
