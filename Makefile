@@ -45,7 +45,7 @@ test: $(STAMP)
 	$(BIN)/python -m pytest
 
 # JupyterLab as students use it: the repository's files (the README among them) with course/
-# open, nbgrader's Validate button but not its instructor tools (duckielib/lab/ says which),
+# open, nbgrader's Validate checking every cell but not its instructor tools (duckielib/lab/),
 # and the course's commands (duckie handin ...) in its terminals.
 lab: $(STAMP)
 	@test -d course || { echo "course/ has no released notebooks yet: see the README's status section."; exit 1; }

@@ -2,7 +2,8 @@
 
 The browser test drives Debian's Chromium with Playwright: it opens JupyterLab as ``make lab``
 starts it, on a copy of the course filled with the reference answers, runs notebook 07 with
-Run > Run All Cells, and checks that no cell shows an error, as a student would see it.
+Run > Run All Cells, and checks that no cell shows an error, as a student would see it; then
+it clicks Validate, which the students' configuration makes look at every cell.
 """
 
 from __future__ import annotations
@@ -20,8 +21,11 @@ import urllib.error
 import urllib.request
 from pathlib import Path
 
+import nbformat
 import pytest
 from coursetools import NAMES, reference_answers, student_copy
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
+from playwright.sync_api import sync_playwright
 
 from autograder.course import ROOT
 
@@ -98,8 +102,7 @@ def test_jupyterlab_serves_the_course_without_the_instructor_tools(tmp_path):
 def browser():
     if not CHROMIUM.exists():
         pytest.skip("Chromium is not installed; install it with `make ros`.")
-    playwright = pytest.importorskip("playwright.sync_api", reason="pip install playwright")
-    with playwright.sync_playwright() as driver:
+    with sync_playwright() as driver:
         chromium = driver.chromium.launch(
             executable_path=str(CHROMIUM),
             args=[
@@ -124,13 +127,22 @@ FINISHED = """() => {
 }"""
 
 
+STARTED = """() => [...document.querySelectorAll('.jp-Notebook .jp-CodeCell .jp-InputPrompt')]
+    .some((prompt) => /\\[(\\*|\\d+)\\]/.test(prompt.textContent))"""
+
+
 def run_all_in_the_browser(page, port, name):
-    """Open a notebook of course/, Run > Run All Cells, wait until the kernel is idle again."""
+    """Open a notebook of course/, Run > Run All Cells, wait until Run All is over."""
     page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?token={TOKEN}")
-    idle = ".jp-Notebook-ExecutionIndicator[data-status='idle']"
-    page.wait_for_selector(idle, timeout=60_000)
-    page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
-    page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=60_000)
+    for _ in range(3):  # a click while the page is still settling can be lost: click again
+        page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
+        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
+        try:
+            page.wait_for_function(STARTED, timeout=20_000)
+            break
+        except PlaywrightTimeout:
+            page.keyboard.press("Escape")
     # Done when no cell waits ([*]) and every cell has run, or one raised (Run All stops there).
     page.wait_for_function(FINISHED, timeout=180_000)
 
@@ -149,7 +161,12 @@ def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, brows
         run_all_in_the_browser(page, port, "07_control")
         shown = page.locator(".jp-RenderedText[data-mime-type='application/vnd.jupyter.stderr']")
         assert shown.all_inner_texts() == [], "cells of 07_control showed errors"
-        assert page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate").count() == 1
+        # Validate, as a student clicks it: the whole notebook, every cell, passes.
+        page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate").click()
+        dialog = page.locator(".jp-Dialog")
+        dialog.wait_for(timeout=180_000)
+        assert "Success! Your notebook passes all the tests." in dialog.inner_text()
+        dialog.get_by_role("button", name="Ok").click()
         # What JupyterLab ran, saved as the student would save it: every cell, no error.
         page.keyboard.press("Control+s")
         path = root / "course" / "07_control" / "07_control.ipynb"
@@ -169,3 +186,32 @@ def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, brows
         )
         page.locator(".jp-RenderedMarkdown a", has_text="README").first.click()
         page.wait_for_selector(".lm-TabBar-tabLabel:text-is('README.md')", timeout=30_000)
+
+
+def test_validate_for_students_reports_any_cell_that_raises_not_only_the_tests(tmp_path):
+    # nbgrader's Validate looks at the test cells only, unless told otherwise: the students'
+    # configuration (duckielib/lab/, which `make lab` starts with) tells it to look at all.
+    from nbgrader.validator import Validator
+    from traitlets.config.loader import JSONFileConfigLoader
+
+    notebook = nbformat.v4.new_notebook()
+    notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3"}
+    test = nbformat.v4.new_code_cell("assert 1 + 1 == 2")
+    test.metadata["nbgrader"] = {
+        "grade": True,
+        "grade_id": "test_sum",
+        "locked": True,
+        "points": 1,
+        "solution": False,
+        "schema_version": 3,
+    }
+    notebook.cells = [nbformat.v4.new_code_cell("open_straight[0]"), test]
+    path = tmp_path / "07_control.ipynb"
+    nbformat.write(notebook, path)
+    assert Validator().validate(str(path)) == {}  # nbgrader's own default: "Success!"
+    config = JSONFileConfigLoader(
+        "nbgrader_config.json", str(ROOT / "duckielib" / "lab")
+    ).load_config()
+    (failed,) = Validator(config=config).validate(str(path))["failed"]
+    assert failed["source"] == "open_straight[0]"
+    assert "NameError" in failed["error"]
