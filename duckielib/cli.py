@@ -142,7 +142,8 @@ def _handin(args: argparse.Namespace) -> int:
 
     count = len(handin_notebooks(args.folder, args.output))
     print(
-        f"Running your {count} notebooks from top to bottom, as grading does (about a minute)...",
+        f"Running your {count} saved notebooks from top to bottom, as grading does "
+        "(about a minute)...",
         flush=True,
     )
     check = handin(args.folder, args.output, progress=lambda run: print(run.summary(), flush=True))

@@ -124,7 +124,7 @@ def test_duckie_handin_checks_each_notebook_and_zips_them_for_duckie_grade(tmp_p
     (course / "01_getting_started" / "notes.txt").write_text("not handed in")
     assert main(["handin", str(course), "-o", str(tmp_path / "ada.zip")]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].startswith("Running your 3 notebooks from top to bottom")
+    assert out[0].startswith("Running your 3 saved notebooks from top to bottom")
     assert out[1].startswith("01_getting_started: 1 of 1 visible tests pass; Run All runs to")
     assert out[2].startswith("03_frames: 4 of 4 visible tests pass; Run All runs to the end")
     assert out[3].startswith(
