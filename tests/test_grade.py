@@ -16,6 +16,7 @@ from typing import Optional
 import nbformat
 import pytest
 
+from autograder.bench import filled_course
 from autograder.course import ROOT
 from autograder.execute import NOT_RUN
 from autograder.grade import grade_class, raised_outside_tests
@@ -85,15 +86,25 @@ def test_the_sandbox_shows_the_robot_project_but_not_a_prepared_solution(
     (project / "deploy").mkdir(parents=True)
     (project / "Dockerfile").write_text("FROM duckietown\n")
     (project / "deploy" / "solution.py").write_text("ANSWERS = 42\n")
+    (tmp_path / "pyproject.toml").write_text("[tool.duckielib]\n")
+    (tmp_path / "gradebook.db").write_text("hidden tests")
     monkeypatch.setattr(robot_project, "PROJECT", project)
+    monkeypatch.setattr(robot_project, "ROOT", tmp_path)
     code = (
         "import pathlib\n"
         f"project = pathlib.Path({str(project)!r})\n"
         "print((project / 'Dockerfile').read_text().strip())\n"
         "print((project / 'deploy' / 'solution.py').exists())\n"
+        "print((project.parent / 'pyproject.toml').read_text().strip())\n"
+        "print((project.parent / 'gradebook.db').exists())\n"
     )
     result = run_inside(tmp_path, code)
-    assert result.stdout.splitlines() == ["FROM duckietown", "False"], result.stderr
+    assert result.stdout.splitlines() == [
+        "FROM duckietown",
+        "False",
+        "[tool.duckielib]",
+        "False",
+    ], result.stderr
 
 
 def test_the_sandbox_limits_memory_and_processes(sandbox, tmp_path):
@@ -275,6 +286,21 @@ def test_every_raising_cell_is_named_once_and_tests_and_cells_not_run_are_left_o
         "cell 6 (while True:): CellTimeoutError: still running after the 5 s a cell may take"
     )
     assert raised_outside_tests("07_control", sent, sent) is None
+
+
+@pytest.mark.notebook
+@pytest.mark.timeout(900)
+def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_problem(
+    sandbox, tmp_path
+):
+    # Every notebook as the grader runs it: in the sandbox, whole, with the driving score. A
+    # cell that needs a file the sandbox does not show (notebook 11 reads the robot project
+    # and pyproject.toml) would be a problem here, though nbgrader scored its tests.
+    filled_course(tmp_path / "submissions" / "ada")
+    (result,) = grade_class(tmp_path / "submissions", tmp_path / "out", jobs=1)
+    assert result.problems == []
+    assert result.total == result.max_total > 60
+    assert result.driving.score == 100, result.driving.reasons
 
 
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):
