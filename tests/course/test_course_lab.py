@@ -56,6 +56,10 @@ def lab(tmp_path, root=None):
         "JUPYTER_RUNTIME_DIR": str(tmp_path / "runtime"),
         "JUPYTER_CONFIG_DIR": str(tmp_path / "config"),
     }
+    # Every cell in the page, not only those scrolled into view, so the test reads them all.
+    settings = tmp_path / "config" / "lab" / "user-settings" / "@jupyterlab" / "notebook-extension"
+    settings.mkdir(parents=True, exist_ok=True)
+    (settings / "tracker.jupyterlab-settings").write_text('{"windowingMode": "none"}')
     options = f"--no-browser --port={port} --ip=127.0.0.1 --IdentityProvider.token={TOKEN}"
     folder = [] if root is None else [f"LAB_DIR={root}"]
     server = subprocess.Popen(
@@ -118,33 +122,37 @@ def browser():
         chromium.close()
 
 
-FINISHED = """() => {
-    const prompts = [...document.querySelectorAll('.jp-Notebook .jp-CodeCell .jp-InputPrompt')]
-        .map((prompt) => prompt.textContent.trim());
-    if (prompts.length === 0 || prompts.some((prompt) => prompt.includes('*'))) return false;
-    const stderr = ".jp-RenderedText[data-mime-type='application/vnd.jupyter.stderr']";
-    return prompts.every((prompt) => /\\[\\d+\\]/.test(prompt)) || !!document.querySelector(stderr);
+#: The notebook on screen (the others stay in the page, hidden), its prompts and its errors.
+SHOWN = ".jp-NotebookPanel:not(.lm-mod-hidden)"
+PROMPTS = f"{SHOWN} .jp-CodeCell .jp-InputPrompt"
+STDERR = f"{SHOWN} .jp-RenderedText[data-mime-type='application/vnd.jupyter.stderr']"
+
+#: Run All is over: no cell waits ([*]), and every cell has run or one raised (Run All stops).
+FINISHED = """([prompts, stderr]) => {
+    const shown = [...document.querySelectorAll(prompts)].map((prompt) => prompt.textContent);
+    if (shown.length === 0 || shown.some((prompt) => prompt.includes("*"))) return false;
+    return shown.every((prompt) => /\\[\\d+\\]/.test(prompt)) || !!document.querySelector(stderr);
 }"""
 
-
-STARTED = """() => [...document.querySelectorAll('.jp-Notebook .jp-CodeCell .jp-InputPrompt')]
+#: Run All has begun: some cell waits or has run.
+STARTED = """(prompts) => [...document.querySelectorAll(prompts)]
     .some((prompt) => /\\[(\\*|\\d+)\\]/.test(prompt.textContent))"""
 
 
 def run_all_in_the_browser(page, port, name):
     """Open a notebook of course/, Run > Run All Cells, wait until Run All is over."""
     page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?token={TOKEN}")
-    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status='idle']", timeout=60_000)
+    idle = f"{SHOWN} .jp-Notebook-ExecutionIndicator[data-status='idle']"
+    page.wait_for_selector(idle, timeout=60_000)
     for _ in range(3):  # a click while the page is still settling can be lost: click again
         page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
         page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
         try:
-            page.wait_for_function(STARTED, timeout=20_000)
+            page.wait_for_function(STARTED, arg=PROMPTS, timeout=20_000)
             break
         except PlaywrightTimeout:
             page.keyboard.press("Escape")
-    # Done when no cell waits ([*]) and every cell has run, or one raised (Run All stops there).
-    page.wait_for_function(FINISHED, timeout=180_000)
+    page.wait_for_function(FINISHED, arg=[PROMPTS, STDERR], timeout=180_000)
 
 
 def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, browser):
@@ -159,8 +167,7 @@ def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, brows
         menus = page.locator(".lm-MenuBar-itemLabel").all_inner_texts()
         assert "Nbgrader" not in menus  # no instructor tools, no assignment list
         run_all_in_the_browser(page, port, "07_control")
-        shown = page.locator(".jp-RenderedText[data-mime-type='application/vnd.jupyter.stderr']")
-        assert shown.all_inner_texts() == [], "cells of 07_control showed errors"
+        assert page.locator(STDERR).all_inner_texts() == [], "cells of 07_control showed errors"
         # Validate, as a student clicks it: the whole notebook, every cell, passes.
         page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate").click()
         dialog = page.locator(".jp-Dialog")
