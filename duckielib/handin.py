@@ -282,18 +282,18 @@ def run_notebook(path: Union[str, Path], cell_seconds: float = CELL_SECONDS) -> 
     run.raised = raised_cells(notebook.cells, notebook.cells, cell_seconds)
     raised = {cell.number for cell in run.raised}
     for number, cell in enumerate(notebook.cells, start=1):
-        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
         if cell.cell_type != "code":
             continue
+        kind, grade_id = cell_kind(cell), cell.metadata.get("nbgrader", {}).get("grade_id")
         shown = [out.get("data", {}) for out in cell.get("outputs", []) if "data" in out]
         if any(
             str(data.get("text/plain", "")).startswith("<Figure size") and len(data) == 1
             for data in shown
         ):
             run.figures_as_text.append(number)
-        if cell_kind(cell) == "exercise":
+        if kind == "exercise":
             run.exercises[grade_id] = number
-        elif cell_kind(cell) == "test":
+        elif kind == "test":
             run.tests[grade_id] = cell.get("execution_count") is not None and number not in raised
     return run
 

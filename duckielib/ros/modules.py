@@ -38,6 +38,7 @@ def _aliases() -> Dict[str, Dict[str, types.ModuleType]]:
     """Top-level name -> {module name: module} for every name this installs."""
     duckietown = types.ModuleType("duckietown", "Duckietown's ROS library (in-process version).")
     duckietown.dtros = dtros  # type: ignore[attr-defined]
+    duckietown._duckielib_alias = True  # type: ignore[attr-defined]
     found: Dict[str, Dict[str, types.ModuleType]] = {
         "rospy": {"rospy": rospy},
         "duckietown": {"duckietown": duckietown, "duckietown.dtros": dtros},
@@ -78,8 +79,6 @@ def install_modules(replace_real: bool = False) -> List[str]:
         if real and not replace_real:
             continue
         for name, module in modules.items():
-            if name == "duckietown":
-                module._duckielib_alias = True  # type: ignore[attr-defined]
             sys.modules[name] = module
         installed.append(top)
     return installed
@@ -152,9 +151,8 @@ class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         """Put duckielib's modules for the name's package into ``sys.modules``."""
         top = module.__name__.partition(".")[0]
         for name, served in _aliases()[top].items():
-            if name == "duckietown":
-                served._duckielib_alias = True  # type: ignore[attr-defined]
-            if not (name != module.__name__ and name in sys.modules):
+            # Its package's other modules too, unless already imported (by a real ROS).
+            if name == module.__name__ or name not in sys.modules:
                 sys.modules[name] = served
 
 
