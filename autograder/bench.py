@@ -3,14 +3,21 @@
 Every submission is a realistic one of the whole course: the released ``course/`` with every
 graded answer cell filled with the reference code of ``solutions/``, as a student who solved
 everything would hand it in (see :func:`filled_course`). ``N`` copies of it (environment
-variable ``DUCKIE_BENCH_GRADE_N``, default 4) are graded three times, each run in a tmp folder
+variable ``DUCKIE_BENCH_GRADE_N``, default 4) are graded four times, each run in a tmp folder
 of its own:
 
 - ``nbgrader_sequential_s_per_submission``: :func:`autograder.course.autograde`, plain
   ``NbGraderAPI.autograde`` one submission after the other, no sandbox;
 - ``grade_jobs1_s_per_submission``: :func:`autograder.grade.grade_class` with the sandbox, one
   student at a time;
-- ``grade_jobs2_s_per_submission``: the same with two students at a time.
+- ``grade_jobs2_s_per_submission``: the same with two students at a time (a local Dask
+  cluster of two workers);
+- ``grade_cluster2_s_per_submission``: the same through a Dask cluster started as an instructor
+  starts one (``dask scheduler`` and two ``dask worker`` processes), its start not counted.
+
+Where one student's grading spends its time, from the one-job run (``jobs1_*``): the whole
+unit, the sandboxed notebook runs (kernels' starts included), the cells themselves, and
+nbgrader's own converters and gradebook.
 
 The grader's driving score is left out (``driving=False``): plain nbgrader has no such step,
 and the figures compare the grading of the same notebooks.
@@ -23,6 +30,7 @@ sequential nbgrader (``grade_speedup_vs_nbgrader``).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import shutil
@@ -186,7 +194,7 @@ def run(
     copies: Optional[int] = None,
     source: Path = ROOT / "solutions",
 ) -> List[Tuple[str, str]]:
-    """Grade ``copies`` filled courses three ways; return the figures, headline last.
+    """Grade ``copies`` filled courses four ways; return the figures, headline last.
 
     Args:
         names: the assignments to grade (default: all of the course). Later notebooks load
@@ -237,35 +245,54 @@ def run(
         for student, scores in plain.items():
             check_full_marks("nbgrader", student, scores.cells, expected)
 
-        grader_s = {}
-        for jobs in (1, 2):
+        grader_s: Dict[str, float] = {}
+        timings: Dict[str, float] = {}
+        from autograder.cluster import dask_cluster
+
+        for run_name, jobs in (("jobs1", 1), ("jobs2", 2), ("cluster2", 2)):
             started = time.perf_counter()
-            results = grade_class(
-                submissions,
-                tmp_path / f"grade_jobs{jobs}",
-                jobs=jobs,
-                names=names,
-                source=source,
-                driving=False,
-            )
-            grader_s[jobs] = time.perf_counter() - started
+            with contextlib.ExitStack() as stack:
+                scheduler = None
+                if run_name.startswith("cluster"):
+                    scheduler = stack.enter_context(dask_cluster(jobs)).address
+                    started = time.perf_counter()  # the cluster's start is not grading
+                results = grade_class(
+                    submissions,
+                    tmp_path / f"grade_{run_name}",
+                    jobs=jobs,
+                    names=names,
+                    source=source,
+                    driving=False,
+                    scheduler=scheduler,
+                )
+            grader_s[run_name] = time.perf_counter() - started
             for result in results:
                 check_full_marks(
-                    f"grade_class with {jobs} jobs",
+                    f"grade_class ({run_name})",
                     result.student,
                     result.cells,
                     expected,
                     result.problems,
                 )
             if {result.student for result in results} != set(students):
-                raise CourseError(f"grade_class with {jobs} jobs did not grade every copy.")
+                raise CourseError(f"grade_class ({run_name}) did not grade every copy.")
+            if run_name == "jobs1":  # one student at a time: the times are not shared
+                for result in results:
+                    for part, seconds in result.timings.items():
+                        timings[part] = timings.get(part, 0.0) + seconds / copies
 
     return [
         ("submissions", str(copies)),
         ("notebooks_per_submission", str(len(names))),
         ("nbgrader_sequential_s_per_submission", f"{nbgrader_s / copies:.1f}"),
-        ("grade_jobs1_s_per_submission", f"{grader_s[1] / copies:.1f}"),
-        ("grade_jobs2_s_per_submission", f"{grader_s[2] / copies:.1f}"),
+        ("grade_jobs1_s_per_submission", f"{grader_s['jobs1'] / copies:.1f}"),
+        *[
+            (f"jobs1_{part}_s_per_submission", f"{timings.get(part, 0.0):.1f}")
+            for part in ("unit", "notebooks", "cells", "nbgrader")
+        ],
+        ("grade_jobs2_s_per_submission", f"{grader_s['jobs2'] / copies:.1f}"),
+        ("grade_cluster2_s_per_submission", f"{grader_s['cluster2'] / copies:.1f}"),
         ("all_full_marks", "yes"),
-        ("grade_speedup_vs_nbgrader", f"{nbgrader_s / grader_s[2]:.2f}"),
+        ("grade_cluster2_speedup_vs_nbgrader", f"{nbgrader_s / grader_s['cluster2']:.2f}"),
+        ("grade_speedup_vs_nbgrader", f"{nbgrader_s / grader_s['jobs2']:.2f}"),
     ]

@@ -2,44 +2,65 @@
 
 The cells the student tagged ``export`` are collected from their notebooks (read as text, never
 run here), and ``duckie mission`` runs that solution on the square-then-circle mission inside
-the same sandbox as their notebooks. The grader then reads the run's bag itself and scores what
-the robot did, with :func:`duckielib.behaviour.mission_report`:
+the same sandbox as their notebooks. The grader then copies the run's bag into a folder of its
+own and scores what the robot did from that copy, with :func:`duckielib.behaviour.mission_report`
+(states, colours, stops) and :func:`autograder.motion.state_motions` (the driving):
 
-=========================================  ======
-a readable bag with the mission's states     10
-the states and LED colours in order          40
-every stop held for its time, standing still 25
-the true end within 10 cm of the start       25
-=========================================  ======
+=================================================  ======
+a readable bag with the mission's states               5
+the states and LED colours in order, then "done"      20
+every stop held for its time, standing still          15
+what the robot really did in the moving states        60
+=================================================  ======
 
-A solution that is incomplete or fails scores zero, with the reason the student would see from
-``duckie mission``. The student's code runs in the simulator's process, so the bag is evidence
-of behaviour, not a proof against forgery: a submission that writes a fake bag is a matter for
-the instructor, like any other cheating.
+The 60 points of driving are split evenly over the mission's moving states (square, return and
+circle: 20 each), and each state's points evenly over its checks, measured on the simulator's
+ground truth from the pose at which the state really began (see :mod:`autograder.motion` for
+the tolerances): each turn's angle and direction, each side's length and where it ends; where the
+way back ends and the heading it ends with; the circle's angle and direction, its radius and
+that it ends where it began. A robot that never drives earns none of them.
+
+Everything the run wrote is read through :func:`autograder.files.read_regular` and scored
+from the grader's own copy: no link is followed (the run's folder included), and a bag that is a
+FIFO, a device or bigger than :data:`BAG_LIMIT` is not read; the run then scores zero, with a
+sentence saying why (a figure like that is only left out).
+
+A run that stops early (a node fails, the mission does not announce its end within the
+simulated time limit, or the wall-clock limit kills it) is scored from the bag it left, with
+the reason first: states it did not finish earn only what they did. A solution that cannot run
+at all scores zero, with the reason the student would see from ``duckie mission``. The student's
+code runs in the simulator's process, so the bag is evidence of behaviour, not a proof against
+forgery: a submission that writes a fake bag is a matter for the instructor, like any other
+cheating.
 """
 
 from __future__ import annotations
 
+import os
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional
 
-from autograder.sandbox import NOBODY, Limits, run
+from autograder.sandbox import Limits, run
 
-__all__ = ["MAX_SCORE", "POINTS", "Driving", "drive"]
+__all__ = ["BAG_LIMIT", "MAX_SCORE", "POINTS", "Driving", "drive", "part_points", "score_bag"]
 
-#: Points of each part of the driving score.
-POINTS = {"bag": 10.0, "states": 40.0, "stops": 25.0, "closure": 25.0}
+#: Points of each part of the driving score; ``"motion"`` is split over the moving states.
+POINTS = {"bag": 5.0, "states": 20.0, "stops": 15.0, "motion": 60.0}
 #: The best driving score.
 MAX_SCORE = sum(POINTS.values())
 #: The robot's name in the run (its namespace).
 ROBOT = "duckiebot"
 #: The trajectory figure may be at most this big (bytes); a larger file is left out.
 FIGURE_LIMIT = 2_000_000
+#: The run's bag (or its unfinished recording) may be at most this big (bytes); a larger one
+#: is not read. The reference's bag is under 10 MB.
+BAG_LIMIT = 200 * 1024**2
 _PNG = b"\x89PNG\r\n\x1a\n"
 
 
@@ -49,10 +70,14 @@ class Driving:
 
     Attributes:
         score: the points, out of :data:`MAX_SCORE`.
-        parts: the points of each part of :data:`POINTS`.
+        parts: the points of each part: ``"bag"``, ``"states"``, ``"stops"``, then one part
+            per moving state of the mission, named after it (``"square"``, ``"return"``, ...).
         reasons: why points were lost, one sentence each.
         summary: what the robot did (the mission report as plain data), or None.
         figure: the trajectory figure's PNG bytes, or None.
+        out_of: the most points of each part of ``parts``.
+        finished: whether the mission ran to its end.
+        timed_out: whether the grader stopped the run at its wall-clock limit.
     """
 
     score: float = 0.0
@@ -60,6 +85,30 @@ class Driving:
     reasons: List[str] = field(default_factory=list)
     summary: Optional[Dict[str, Any]] = None
     figure: Optional[bytes] = None
+    out_of: Dict[str, float] = field(default_factory=dict)
+    finished: bool = False
+    timed_out: bool = False
+
+
+def part_points(mission: str = "square_then_circle") -> Dict[str, float]:
+    """The most points of each part of the driving score of ``mission``.
+
+    The motion's points are split evenly over the mission's moving states, each a part named
+    after its state (a name that repeats gets its position: ``"square (state 2)"``).
+    """
+    from duckielib.missions import mission_named
+
+    moving = [
+        (index, state.name)
+        for index, state in enumerate(mission_named(mission).states)
+        if not state.is_stop and state.moves
+    ]
+    names = [name for _, name in moving]
+    points = {name: POINTS[name] for name in ("bag", "states", "stops")}
+    for index, name in moving:
+        key = name if names.count(name) == 1 else f"{name} (state {index + 1})"
+        points[key] = POINTS["motion"] / len(moving)
+    return points
 
 
 def drive(
@@ -97,9 +146,10 @@ def drive(
     folder.mkdir(parents=True)
     (folder / "solution.py").write_text(text, encoding="utf-8")
     for path in [folder, *folder.rglob("*")]:
-        shutil.chown(path, NOBODY, NOBODY)
+        shutil.chown(path, limits.uid, limits.uid)
     command = [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "solution.py"]
     command += ["--mission", mission, "--out", "run", "--no-animation"]
+    run_folder = folder / "run"
     try:
         result = run(
             command,
@@ -110,54 +160,189 @@ def drive(
             env={"VEHICLE_NAME": ROBOT},
         )
     except subprocess.TimeoutExpired:
-        return Driving(
-            reasons=[f"The mission did not end within {limits.mission_seconds} s of wall time."]
-        )
+        why = f"The mission did not end within {limits.mission_seconds} s of wall time."
+        driving = _score_unfinished(run_folder, mission, why)
+        driving.timed_out = True
+        return driving
     if result.returncode != 0:
-        return Driving(reasons=[_failure(result.stderr)])
-    return score_bag(folder / "run", mission)
+        return _score_unfinished(run_folder, mission, _failure(result.stderr))
+    return score_bag(run_folder, mission)
+
+
+def _score_unfinished(run: Path, mission: str, why: str) -> Driving:
+    """Score what a run that stopped early left: its bag, or what a killed recording kept.
+
+    A recording killed with its process is left as ``mission.bag.active``, without an index;
+    it is copied into a folder of the grader's own, and its complete messages into a new bag
+    there, which is scored.
+    """
+    from duckielib.bags.repair import repair_bag
+    from duckielib.errors import DuckielibError
+
+    out_of = part_points(mission)
+    with tempfile.TemporaryDirectory(prefix="driving-") as scratch:
+        try:
+            bag = _copy(run, "mission.bag", Path(scratch), "The mission's bag")
+        except _Unread as unread:
+            if not unread.missing:
+                return Driving(out_of=out_of, reasons=[why, unread.reason])
+            try:
+                active = _copy(run, "mission.bag.active", Path(scratch), "The mission's recording")
+            except _Unread as unread_active:
+                reasons = [why] if unread_active.missing else [why, unread_active.reason]
+                return Driving(out_of=out_of, reasons=reasons)
+            bag = Path(scratch) / "mission.bag"
+            try:
+                repair_bag(active, bag)
+            except (DuckielibError, ValueError, OSError):
+                return Driving(out_of=out_of, reasons=[why])
+        driving = _score_copy(bag, mission)
+    driving.figure = _figure(run)
+    if not driving.parts.get("bag"):  # nothing of the mission reached the bag
+        return Driving(out_of=out_of, reasons=[why])
+    driving.finished = False
+    # The report's own sentence about the missing end is said better by the reason.
+    driving.reasons = [why, "It is scored from the bag it wrote until then."] + [
+        reason for reason in driving.reasons if "never announced" not in reason
+    ]
+    return driving
+
+
+class _Unread(Exception):
+    """A file of the run the grader does not read, and why (``missing``: it was not written)."""
+
+    def __init__(self, reason: str, missing: bool = False) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.missing = missing
+
+
+def _read(run: Path, name: str, limit: int, what: str) -> bytes:
+    """The bytes of the regular file ``name`` in the folder ``run``, read without trusting it.
+
+    Neither ``run`` itself nor ``name`` may be a link: the folder above ``run`` is the
+    grader's, and :func:`autograder.files.read_regular` opens each part below it without
+    following links, refuses FIFOs, devices and files over ``limit`` bytes.
+
+    Raises:
+        _Unread: with a sentence that starts with ``what`` and names no path.
+    """
+    from autograder.files import UnsafeFile, read_regular
+
+    run = Path(run).absolute()  # not resolved: a link as the run's folder is refused below
+    if run.name in ("", ".."):  # the grader's own way to name a folder, not the run's
+        run = run.resolve()
+    relative = f"{run.name}/{name}"
+    try:
+        return read_regular(run.parent, relative, limit)
+    except UnsafeFile as error:
+        said = str(error)
+    except OSError:  # the folder above the run cannot be opened
+        said = f"{relative}: {run.name} is not a folder."
+    if said.startswith(f"{relative}: "):  # the run's folder itself
+        if not os.path.lexists(run):
+            raise _Unread(f"{what} was not written.", missing=True) from None
+        kind = "a symbolic link" if run.is_symlink() else "not a folder"
+        raise _Unread(f"{what} was not read: the run's folder is {kind}.") from None
+    if said == f"{relative} does not exist.":
+        raise _Unread(f"{what} was not written.", missing=True) from None
+    raise _Unread(f"{what} was not read: {said.replace(relative, 'it', 1)}") from None
+
+
+def _copy(run: Path, name: str, scratch: Path, what: str) -> Path:
+    """Copy the run's file ``name`` (at most :data:`BAG_LIMIT` bytes) into ``scratch``."""
+    target = scratch / name
+    target.write_bytes(_read(run, name, BAG_LIMIT, what))
+    return target
+
+
+def _figure(run: Path) -> Optional[bytes]:
+    """The run's trajectory figure: PNG bytes of at most :data:`FIGURE_LIMIT`, or None."""
+    try:
+        data = _read(run, "trajectory.png", FIGURE_LIMIT, "The figure")
+    except _Unread:
+        return None
+    return data if data.startswith(_PNG) else None
 
 
 def _failure(stderr: str) -> str:
-    """The sentence ``duckie mission`` ended with, or the last line it printed."""
+    """The sentence ``duckie mission`` ended with, or the last line it printed, without paths."""
     lines = [line for line in stderr.splitlines() if line.strip()]
     said = [line[len("duckie: ") :] for line in lines if line.startswith("duckie: ")]
     if said:
-        # The run's log stays in the sandbox: the sentence pointing to it is left out.
-        reason = re.sub(r"\s*The run's log is in \S+$", "", said[-1])
-        return f"The mission could not run: {reason}"
-    return "The mission stopped with an error: " + (lines[-1][:300] if lines else "no message")
+        return f"The mission could not run to its end: {_without_paths(said[-1])}"
+    last = _without_paths(lines[-1][:300]) if lines else "no message"
+    return "The mission stopped with an error: " + last
+
+
+def _without_paths(text: str) -> str:
+    """``text`` without the sentences pointing to the run's files, and with files by name only.
+
+    The run's folder and its log stay in the sandbox: a student cannot open them.
+    """
+    text = re.sub(r"\s*The run's [^.]*? (?:is|are) in \S+?\.?$", "", text.strip())
+    text = re.sub(r"[;,]?\s*(?:its|the) traceback is in \S+", "", text)
+    return re.sub(r"(?:/[^\s/:;,'\")]+)+/([^\s/:;,'\")]+)", r"\1", text)
 
 
 def score_bag(run: Path, mission: str = "square_then_circle") -> Driving:
-    """Score the run in folder ``run`` from its bag, read by the grader.
+    """Score the run in folder ``run`` from its bag, copied and read by the grader.
+
+    The bag and the figure are read without following links (``run`` itself included) and
+    only if they are regular files of at most :data:`BAG_LIMIT` and :data:`FIGURE_LIMIT`
+    bytes; the bag is copied into a folder of the grader's own, and that copy is scored.
 
     Args:
         run: the folder ``duckie mission`` wrote (``mission.bag``, ``trajectory.png``).
         mission: the mission that was driven.
     """
+    out_of = part_points(mission)
+    with tempfile.TemporaryDirectory(prefix="driving-") as scratch:
+        try:
+            bag = _copy(run, "mission.bag", Path(scratch), "The mission's bag")
+        except _Unread as unread:
+            why = "The mission wrote no bag." if unread.missing else unread.reason
+            return Driving(out_of=out_of, reasons=[why])
+        driving = _score_copy(bag, mission)
+    driving.figure = _figure(run)
+    return driving
+
+
+def _score_copy(path: Path, mission: str) -> Driving:
+    """Score the bag at ``path``, the grader's own copy of a run's bag."""
+    from autograder.motion import driving_problems, state_motions
+    from duckielib.bags import Bag, pose_tracks
     from duckielib.behaviour import mission_report
     from duckielib.errors import DuckielibError
     from duckielib.missions import mission_named
 
-    bag = run / "mission.bag"
-    if not bag.is_file() or bag.is_symlink():
-        return Driving(reasons=["The mission wrote no bag."])
+    out_of = part_points(mission)
+    chosen = mission_named(mission)
     try:
-        report = mission_report(bag, mission_named(mission), f"/{ROBOT}/")
+        bag = Bag(path)
+        tracks = pose_tracks(bag, "record")
+        report = mission_report(bag, chosen, f"/{ROBOT}/", tracks=tracks)
+        motions = state_motions(chosen, report, tracks)
     except (DuckielibError, ValueError, KeyError, OSError) as error:
-        return Driving(reasons=[f"The mission's bag cannot be read: {error}"])
-    driving = Driving(summary=report.as_dict(), reasons=list(report.problems))
+        why = f"The mission's bag cannot be read: {_without_paths(str(error))}"
+        return Driving(out_of=out_of, reasons=[why])
+    summary = report.as_dict()
+    problems = summary.pop("problems")
+    summary["motion"] = [motion.as_dict() for motion in motions]
+    summary["problems"] = problems
+    driving = Driving(
+        summary=summary,
+        reasons=driving_problems(report, motions),
+        out_of=out_of,
+        finished=report.finished,
+    )
     earned = {
-        "bag": bool(report.states),
-        "states": report.states_in_order,
-        "stops": report.stops_held,
-        "closure": report.closed,
+        "bag": 1.0 if report.states else 0.0,
+        "states": 1.0 if report.states_in_order and report.finished else 0.0,
+        "stops": 1.0 if report.stops_held else 0.0,
     }
-    driving.parts = {name: POINTS[name] if ok else 0.0 for name, ok in earned.items()}
-    driving.score = sum(driving.parts.values())
-    figure = run / "trajectory.png"
-    if figure.is_file() and not figure.is_symlink() and figure.stat().st_size <= FIGURE_LIMIT:
-        data = figure.read_bytes()
-        driving.figure = data if data.startswith(_PNG) else None
+    moving = [name for name in out_of if name not in earned]
+    earned.update(zip(moving, (motion.fraction for motion in motions)))
+    driving.parts = {name: round(out_of[name] * earned[name], 2) for name in out_of}
+    driving.score = round(sum(driving.parts.values()), 2)
     return driving

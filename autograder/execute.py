@@ -1,4 +1,4 @@
-"""Run one notebook's cells inside the sandbox, with nbgrader's own executor.
+"""Run one notebook's cells inside the sandbox, as nbgrader's executor runs it.
 
 The grader sends the notebook (instructor's cells restored, hidden tests included) on standard
 input and reads the executed notebook on standard output; the notebook never lies in the
@@ -7,6 +7,12 @@ Usage (inside the sandbox): ``python execute.py CELL_SECONDS``.
 
 A cell that never got to run (the kernel died before it: ``os._exit``, a crash, the memory
 limit) gets an error output, so nbgrader scores its tests as failed rather than passed.
+
+The kernel is forked from a pre-warmed process (:class:`Zygote`) that has already imported
+ipykernel and the course's libraries while this script read the notebook, rather than started
+as a new Python: that saves the start of a second interpreter and lets the imports overlap the
+reading. ``DUCKIE_KERNEL_ZYGOTE=0`` turns it off; if the zygote cannot start, the kernel is
+launched the usual way.
 
 Tests run in the same kernel as the student's code, so that code could replace what the tests
 rely on (``np.allclose = lambda *a, **k: True``, a fake ``np``, IPython's error display). Before
@@ -18,11 +24,27 @@ sets out to defeat the guard itself is a matter for the instructor, like any che
 from __future__ import annotations
 
 import ast
+import contextlib
+import json
+import os
+import select
+import signal
 import sys
+import time
+from pathlib import Path
+from typing import Any, Dict, List, NoReturn, Optional, Sequence, Tuple
 
 NOT_RUN = "NotRun"
 #: Where the grader's findings travel back, in the notebook's metadata.
 METADATA_KEY = "duckie_grading"
+#: The most output one cell keeps, in characters (a picture's data counts too).
+OUTPUT_LIMIT = 2_000_000
+#: The error a cell that ran out of time is given (as nbgrader gives it).
+TIMEOUT_ERROR = {
+    "ename": "CellTimeoutError",
+    "evalue": "",
+    "traceback": ["CellTimeoutError: No reply from kernel before timeout"],
+}
 
 #: Run before the first cell: keeps the originals of what tests rely on.
 GUARD_SETUP = r"""
@@ -114,34 +136,35 @@ def mark_not_run(notebook: object, reason: str) -> None:
             ]
 
 
-def _guarded_execute_class():
-    """The Execute of nbgrader, with the guard run before the first cell and before each test."""
+def _guarded_client_class():
+    """The NotebookClient of nbclient, run as nbgrader's Execute runs it, with the guard.
+
+    The settings are those of nbgrader's ``Execute`` preprocessor (errors allowed, a cell that
+    runs out of time interrupted and given a ``CellTimeoutError``, the kernel's history kept in
+    memory); nbclient is used directly because importing nbgrader in the sandbox costs about
+    0.8 s of CPU per notebook, more than many notebooks' own cells.
+    """
     import nbformat
-    from nbgrader.preprocessors import Execute
+    from nbclient import NotebookClient
 
-    class GuardedExecute(Execute):
-        def preprocess(self, nb, resources=None, km=None):
-            self.replaced = {}
-            self.guarded = False
-            return super().preprocess(nb, resources, km)
-
-        def preprocess_cell(self, cell, resources, index):
-            if not self.guarded:
+    class GuardedClient(NotebookClient):
+        async def async_execute_cell(self, cell, cell_index, execution_count=None, **kwargs):
+            if not getattr(self, "guarded", False):
                 self.guarded = True
-                self._run_hidden(GUARD_SETUP, index)
+                await self._run_hidden(GUARD_SETUP, cell_index)
             meta = cell.get("metadata", {}).get("nbgrader", {})
             if cell.cell_type == "code" and meta.get("grade"):
-                changed = self._run_hidden(GUARD_CHECK, index)
+                changed = await self._run_hidden(GUARD_CHECK, cell_index)
                 if changed:
-                    self.replaced[meta.get("grade_id", f"cell {index + 1}")] = changed
-            return super().preprocess_cell(cell, resources, index)
+                    self.replaced[meta.get("grade_id", f"cell {cell_index + 1}")] = changed
+            return await super().async_execute_cell(cell, cell_index, execution_count, **kwargs)
 
-        def _run_hidden(self, source, index):
+        async def _run_hidden(self, source, index):
             """Run ``source`` in the kernel without a cell of its own; its value, if a list."""
             real = self.nb.cells[index]
             probe = nbformat.v4.new_code_cell(source)
             try:
-                self.execute_cell(probe, index, store_history=False)
+                await super().async_execute_cell(probe, index, store_history=False)
             finally:
                 self.nb.cells[index] = real  # nbclient puts the executed cell at the index
             for output in probe.get("outputs", []):
@@ -153,13 +176,581 @@ def _guarded_execute_class():
                     return [str(item) for item in value] if isinstance(value, list) else []
             return []
 
-    return GuardedExecute
+    return GuardedClient
+
+
+def _record_reply_error(cell, execute_reply, **_):
+    """Give a cell the error of its reply when no output shows it (a timeout's, for one)."""
+    import nbformat
+
+    content = (execute_reply or {}).get("content", {})
+    if content.get("status") != "error":
+        return
+    shown = [out.get("ename") for out in cell.get("outputs", []) if out.output_type == "error"]
+    if content.get("ename") not in shown:
+        cell.outputs.append(
+            nbformat.v4.new_output(
+                "error",
+                ename=content.get("ename", "Error"),
+                evalue=content.get("evalue", ""),
+                traceback=content.get("traceback") or [content.get("ename", "Error")],
+            )
+        )
+
+
+def limit_outputs(notebook: object, limit: int = OUTPUT_LIMIT) -> List[str]:
+    """Cut every cell's outputs down to ``limit`` characters; say which cells were cut.
+
+    Text keeps its first ``limit`` characters and a note saying how much was left out;
+    pictures and other data past the limit are replaced by the note.
+
+    Returns:
+        One sentence per cell that was cut.
+    """
+    import nbformat
+
+    said = []
+    for number, cell in enumerate(notebook.cells, start=1):  # type: ignore[attr-defined]
+        if cell.cell_type != "code":
+            continue
+        total = sum(_output_size(output) for output in cell.get("outputs", []))
+        if total <= limit:
+            continue
+        kept, room = [], limit
+        for output in cell.outputs:
+            size = _output_size(output)
+            if size <= room:
+                kept.append(output)
+                room -= size
+            elif output.output_type == "stream" and room > 0:
+                output.text = output.text[:room]
+                kept.append(output)
+                room = 0
+        note = (
+            f"[The grader kept {_megabytes(limit)} of this cell's {_megabytes(total)} of output; "
+            "the rest was left out.]\n"
+        )
+        kept.append(nbformat.v4.new_output("stream", name="stderr", text=note))
+        cell.outputs = kept
+        said.append(
+            f"cell {number} showed {_megabytes(total)} of output; the stored notebook keeps "
+            f"the first {_megabytes(limit)}"
+        )
+    return said
+
+
+def _output_size(output) -> int:
+    if output.get("output_type") == "stream":
+        return len(output.get("text", ""))
+    if output.get("output_type") == "error":
+        lines = output.get("traceback", [])
+        return len(output.get("evalue", "")) + sum(len(line) for line in lines)
+    return sum(len(str(value)) for value in output.get("data", {}).values())
+
+
+def _megabytes(count: int) -> str:
+    return f"{count / 1e6:.1f} MB"
+
+
+#: Set to ``0`` to launch every kernel the usual way (a new Python) instead of forking it.
+ZYGOTE_VARIABLE = "DUCKIE_KERNEL_ZYGOTE"
+#: What the zygote imports before it forks a kernel: the kernel itself, and what the first cell
+#: of every course notebook imports. None of them selects matplotlib's backend on import.
+ZYGOTE_IMPORTS = (
+    "ipykernel.kernelapp",
+    "ipykernel.ipkernel",
+    "numpy",
+    "matplotlib",
+    "matplotlib.pyplot",
+    "PIL.Image",
+    "IPython.display",
+    "duckielib.bags",
+    "duckielib.sim",
+    "duckielib.ros",
+    "duckielib.plots",
+    "duckielib.nodes",
+)
+#: How long a kernel's launch waits for the zygote (its imports included), in seconds.
+ZYGOTE_SECONDS = 60.0
+#: The matplotlib backend ipykernel chooses when ``MPLBACKEND`` is not set.
+_INLINE_BACKEND = "module://matplotlib_inline.backend_inline"
+#: How often the provisioner looks whether a kernel it killed has ended, in seconds.
+_POLL_SECONDS = 0.005
+
+
+class Zygote:
+    """A process that has imported the kernel and the course's libraries, and forks kernels.
+
+    Starting a kernel the usual way runs a new Python, which imports ipykernel and then, in
+    the notebook's first cell, numpy, matplotlib and duckielib. The zygote is forked from this
+    script before the script reads the notebook or imports nbclient, zmq or asyncio (so it holds
+    neither the notebook nor a thread); it imports all that while the script reads the notebook,
+    then forks each kernel the kernel manager asks for: the child starts a session of its own,
+    changes to the notebook's folder and runs ipykernel's ``IPKernelApp`` on the connection
+    file, as ``python -m ipykernel_launcher`` would. The zygote reaps its children and reports
+    their exit status over a pipe; :meth:`exit_code` is how the kernel's provisioner learns that
+    the kernel died.
+
+    A forked kernel starts as a new one: the environment and arguments the kernel manager gives
+    it, ``sys.path`` of a new kernel, an empty namespace whose ``__name__`` is ``"__main__"``,
+    numpy's global random state seeded anew. The modules already imported are the difference
+    (a student's ``numpy.py`` next to the notebook cannot stand in for one of them). The zygote
+    serves only kernels whose environment is its own (the imports may have read it), and only
+    while it runs a single thread (``OPENBLAS_NUM_THREADS=1``, as in the sandbox).
+
+    Messages are JSON lines: to the zygote ``{"command", "cwd", "env"}``; back ``{"started":
+    pid}``, ``{"failed": reason}``, ``{"exited": pid, "code": code}``.
+    """
+
+    def __init__(self, pid: int, requests: int, replies: int) -> None:
+        self.pid = pid
+        self._requests: Optional[int] = requests
+        self._replies = replies
+        self._pending = b""
+        self._exits: Dict[int, int] = {}
+        self._gone = False
+
+    @classmethod
+    def start(cls) -> Optional[Zygote]:
+        """Fork the zygote; None if it cannot be (the process limit)."""
+        to_zygote, requests = os.pipe()
+        replies, from_zygote = os.pipe()
+        try:
+            pid = os.fork()
+        except OSError:  # the process limit
+            for fd in (to_zygote, requests, replies, from_zygote):
+                os.close(fd)
+            return None
+        if pid == 0:
+            code = 1
+            try:
+                os.close(requests)
+                os.close(replies)
+                code = _serve(to_zygote, from_zygote)
+            finally:
+                os._exit(code)
+        os.close(to_zygote)
+        os.close(from_zygote)
+        os.set_blocking(replies, False)
+        return cls(pid, requests, replies)
+
+    def launch(
+        self, command: Sequence[str], cwd: Optional[str], env: Dict[str, str]
+    ) -> Optional[int]:
+        """Fork a kernel that runs ``command`` (``python -m ipykernel_launcher ARGS``).
+
+        Args:
+            command: the kernel's command line, as the kernel manager built it.
+            cwd: the folder the kernel starts in (None: this process's).
+            env: the kernel's environment variables.
+
+        Returns:
+            The kernel's process id, or None if the zygote could not start it (it is then to be
+            launched the usual way).
+        """
+        if self._requests is None or self._gone:
+            return None
+        data = json.dumps({"command": list(command), "cwd": cwd, "env": env}).encode() + b"\n"
+        try:
+            while data:
+                data = data[os.write(self._requests, data) :]
+        except OSError:  # the zygote has ended (it could not import, or runs threads)
+            self._gone = True
+            return None
+        deadline = time.monotonic() + ZYGOTE_SECONDS
+        while True:
+            for message in self._read():
+                if "started" in message:
+                    return int(message["started"])
+                if "failed" in message:
+                    return None
+            left = deadline - time.monotonic()
+            if self._gone or left <= 0:
+                self.close(kill=True)
+                return None
+            select.select([self._replies], [], [], left)
+
+    def exit_code(self, pid: int) -> Optional[int]:
+        """The exit code of a kernel the zygote started, None while it runs.
+
+        As :attr:`subprocess.Popen.returncode`: ``-N`` if signal ``N`` ended it. Should the
+        zygote be gone before it reported the exit, a kernel that no longer exists counts as
+        killed.
+        """
+        self._read()
+        if pid in self._exits:
+            return self._exits[pid]
+        if self._gone:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                return -signal.SIGKILL
+            except PermissionError:
+                pass
+        return None
+
+    def _read(self) -> List[Dict[str, Any]]:
+        """The messages the zygote sent since the last read; exits are recorded on the way."""
+        while not self._gone:
+            try:
+                data = os.read(self._replies, 65536)
+            except BlockingIOError:
+                break
+            except OSError:
+                data = b""
+            if not data:
+                self._gone = True
+            self._pending += data
+        *lines, self._pending = self._pending.split(b"\n")
+        messages = [json.loads(line) for line in lines if line]
+        for message in messages:
+            if "exited" in message:
+                self._exits[int(message["exited"])] = int(message["code"])
+        return messages
+
+    def close(self, kill: bool = False) -> None:
+        """End the zygote (it kills the kernels it started) and wait for it.
+
+        Waiting counts the zygote's and its kernels' CPU time in this process's, as a kernel
+        launched the usual way is counted.
+
+        Args:
+            kill: kill it at once rather than let it finish its work first.
+        """
+        if self._requests is not None:
+            os.close(self._requests)
+            self._requests = None
+        deadline = time.monotonic() + (0 if kill else 5)
+        while True:
+            try:
+                if os.waitpid(self.pid, os.WNOHANG)[0]:
+                    break
+            except ChildProcessError:
+                break
+            if time.monotonic() >= deadline:
+                os.kill(self.pid, signal.SIGKILL)
+                os.waitpid(self.pid, 0)
+                break
+            time.sleep(_POLL_SECONDS)
+        self._gone = True
+
+
+def _serve(requests: int, replies: int) -> int:
+    """The zygote's life: import, then fork a kernel for each request until the pipe closes.
+
+    Args:
+        requests: the pipe the requests come on.
+        replies: the pipe the answers and exit statuses go on.
+
+    Returns:
+        The zygote's exit code.
+    """
+    warm = _warm_up(requests, replies)
+    if warm is None:
+        return 0  # the pipe closes: each kernel is launched the usual way
+    path, env, launcher = warm
+    _Forks(requests, replies, path, env, launcher).serve()
+    return 0
+
+
+def _warm_up(*keep: int) -> Optional[Tuple[List[str], Dict[str, str], str]]:
+    """Make the zygote what a new kernel is before its first cell, with the imports done.
+
+    Args:
+        keep: the zygote's pipes, left open (every other descriptor past the standard three
+            is closed, as a kernel launched the usual way inherits none).
+
+    Returns:
+        A new kernel's ``sys.path`` (before ipykernel adds the working folder), the environment
+        the imports saw (see :func:`_kernel_env`) and the file of ``ipykernel_launcher``; None
+        if kernels cannot be forked from here (no ipykernel, or a library started a thread).
+    """
+    import importlib.util
+
+    quiet = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):  # neither the notebook on the input nor the answer on the output
+        os.dup2(quiet, fd)
+    os.close(quiet)
+    low = 3
+    for fd in sorted(keep):
+        os.closerange(low, fd)
+        low = fd + 1
+    os.closerange(low, os.sysconf("SC_OPEN_MAX"))
+    # A new kernel's sys.path: without the folder Python put first for this script, as
+    # ipykernel_launcher takes out the one Python put first for it.
+    if not sys.flags.safe_path:
+        del sys.path[0]
+    if not os.environ.get("MPLBACKEND"):  # the kernel sets it so before matplotlib's import
+        os.environ["MPLBACKEND"] = _INLINE_BACKEND
+    env = _kernel_env(os.environ)
+    for name in ZYGOTE_IMPORTS:
+        with contextlib.suppress(Exception):  # the notebook's own import says why
+            __import__(name)
+    launcher = importlib.util.find_spec("ipykernel_launcher")
+    if _threads() != 1 or launcher is None or launcher.origin is None:
+        return None
+    if _kernel_env(os.environ) != env:  # an import set a variable the kernel would not have
+        return None
+    return list(sys.path), env, launcher.origin
+
+
+class _Forks:
+    """The zygote's loop: fork a kernel for each request, report each kernel's exit.
+
+    Single-threaded: a SIGCHLD wakes the loop through a pipe (``signal.set_wakeup_fd``).
+    """
+
+    def __init__(
+        self, requests: int, replies: int, path: List[str], env: Dict[str, str], launcher: str
+    ) -> None:
+        self.requests, self.replies = requests, replies
+        self.path, self.env, self.launcher = path, env, launcher
+        self.children: List[int] = []
+        self.wake, woken = os.pipe()
+        os.set_blocking(self.wake, False)
+        os.set_blocking(woken, False)
+        self.own = (requests, replies, self.wake, woken)
+        signal.signal(signal.SIGCHLD, lambda *_: None)
+        signal.set_wakeup_fd(woken, warn_on_full_buffer=False)
+
+    def serve(self) -> None:
+        """Answer requests until the pipe closes; then kill what is left and reap it."""
+        pending = b""
+        try:
+            while True:
+                ready = select.select([self.requests, self.wake], [], [])[0]
+                if self.wake in ready:
+                    self.reap()
+                if self.requests not in ready:
+                    continue
+                data = os.read(self.requests, 65536)
+                if not data:
+                    return
+                *lines, pending = (pending + data).split(b"\n")
+                for line in lines:
+                    self.answer(json.loads(line))
+        finally:
+            for pid in self.children:  # left only if this script ended without stopping them
+                try:
+                    os.killpg(pid, signal.SIGKILL)
+                except OSError:  # not yet in a session of its own
+                    with contextlib.suppress(OSError):
+                        os.kill(pid, signal.SIGKILL)
+            for pid in self.children:
+                with contextlib.suppress(ChildProcessError):
+                    os.waitpid(pid, 0)
+
+    def answer(self, request: Dict[str, Any]) -> None:
+        """Fork the kernel ``request`` asks for, if it can be forked here; say which it is."""
+        if _kernel_env(request["env"]) != self.env:
+            self.say({"failed": "the kernel's environment differs from the zygote's"})
+        elif _threads() != 1:
+            self.say({"failed": "the zygote runs more than one thread"})
+        else:
+            pid = os.fork()
+            if pid == 0:
+                _run_kernel(request, self.launcher, self.path, self.own)
+            self.children.append(pid)
+            self.say({"started": pid})
+
+    def reap(self) -> None:
+        """Reap the kernels that ended and report their exit codes."""
+        with contextlib.suppress(BlockingIOError):
+            while os.read(self.wake, 512):
+                pass
+        while self.children:
+            try:
+                pid, status = os.waitpid(-1, os.WNOHANG)
+            except ChildProcessError:
+                return
+            if pid == 0:
+                return
+            if pid in self.children:
+                self.children.remove(pid)
+                self.say({"exited": pid, "code": os.waitstatus_to_exitcode(status)})
+
+    def say(self, message: Dict[str, Any]) -> None:
+
+        data = json.dumps(message).encode() + b"\n"
+        while data:
+            data = data[os.write(self.replies, data) :]
+
+
+def _kernel_env(env: Dict[str, str]) -> Dict[str, str]:
+    """The environment variables that matter to the zygote's imports, from a kernel's.
+
+    ``JPY_PARENT_PID`` names the kernel's parent, set for each kernel; an unset
+    ``MPLBACKEND`` is the inline backend ipykernel sets.
+    """
+    env = {key: value for key, value in env.items() if key != "JPY_PARENT_PID"}
+    if not env.get("MPLBACKEND"):
+        env["MPLBACKEND"] = _INLINE_BACKEND
+    return env
+
+
+def _threads() -> int:
+    """How many threads this process runs; 0 if that cannot be known."""
+    try:
+        return sum(1 for _ in Path("/proc/self/task").iterdir())
+    except OSError:
+        return 0
+
+
+def _run_kernel(
+    request: Dict[str, Any], launcher: str, path: List[str], inherited: Sequence[int]
+) -> NoReturn:
+    """In a child of the zygote: become the kernel ``request`` asks for, and end with it.
+
+    What ``python -m ipykernel_launcher ARGS`` would be, started as jupyter_client starts it:
+    a session of its own, standard input an empty pipe, output and error the zygote's (the
+    null device), the working folder and environment of the request, ``JPY_PARENT_PID`` the
+    parent (here the zygote, which ends with this script).
+
+    Args:
+        request: the command line, working folder and environment of the kernel.
+        launcher: the file of ``ipykernel_launcher`` (``sys.argv[0]`` of a new kernel).
+        path: ``sys.path`` of a new kernel, before ipykernel adds the working folder.
+        inherited: the zygote's own file descriptors, closed here.
+    """
+    import atexit
+
+    code = 1
+    try:
+        os.setsid()
+        signal.set_wakeup_fd(-1)
+        signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        for fd in inherited:
+            os.close(fd)
+        empty, closed = os.pipe()
+        os.close(closed)
+        os.dup2(empty, 0)
+        os.close(empty)
+        if request["cwd"]:
+            os.chdir(request["cwd"])
+        os.environ.clear()
+        os.environ.update(request["env"])
+        os.environ["JPY_PARENT_PID"] = str(os.getppid())
+        command = request["command"]
+        sys.argv = [launcher, *command[3:]]
+        sys.orig_argv = list(command)
+        sys.path[:] = path
+        if "numpy" in sys.modules:  # a new process seeds numpy's global generator anew
+            sys.modules["numpy"].random.seed()
+        from ipykernel.kernelapp import IPKernelApp
+
+        app = IPKernelApp.instance()
+        app.parent_handle = os.getppid()  # its default was read at import, in the zygote
+        app.initialize()
+        app.start()
+        code = 0
+    except SystemExit as stop:
+        code = stop.code if isinstance(stop.code, int) else int(stop.code is not None)
+    except BaseException:
+        import traceback
+
+        traceback.print_exc()
+    finally:
+        try:
+            atexit._run_exitfuncs()
+            sys.stdout.flush()
+            sys.stderr.flush()
+        finally:
+            os._exit(code)
+
+
+def _forking_manager_class(zygote: Zygote) -> type:
+    """An AsyncKernelManager whose kernels the zygote forks, when it can.
+
+    Its provisioner is jupyter_client's ``LocalProvisioner`` (connection file, ports, the
+    usual launch as the fallback) with the launch and the process handling of a forked kernel:
+    poll and wait read the exit status the zygote reports, signals go to the kernel's process
+    group (an interrupt is SIGINT, as for a kernel launched the usual way).
+    """
+    import asyncio
+    import uuid
+
+    from jupyter_client.manager import AsyncKernelManager
+    from jupyter_client.provisioning import LocalProvisioner
+
+    class ForkedProvisioner(LocalProvisioner):
+        forked: Optional[int] = None
+
+        @property
+        def has_process(self) -> bool:
+            return self.forked is not None or super().has_process
+
+        async def launch_kernel(self, cmd: List[str], **kwargs: Any) -> Any:
+            usual = set(kwargs) <= {"env", "cwd", "kernel_id"}  # nothing only Popen can do
+            if usual and _is_ipykernel(cmd):
+                pid = zygote.launch(cmd, kwargs.get("cwd"), kwargs.get("env", dict(os.environ)))
+                if pid is not None:
+                    self.forked = self.pid = self.pgid = pid
+                    self.cwd = kwargs.get("cwd") or Path.cwd()
+                    return self.connection_info
+            return await super().launch_kernel(cmd, **kwargs)
+
+        async def poll(self) -> Optional[int]:
+            if self.forked is None:
+                return await super().poll()
+            return zygote.exit_code(self.forked)
+
+        async def wait(self) -> Optional[int]:
+            if self.forked is None:
+                return await super().wait()
+            while zygote.exit_code(self.forked) is None:
+                await asyncio.sleep(_POLL_SECONDS)
+            code = zygote.exit_code(self.forked)
+            self.forked = None
+            return code
+
+        async def send_signal(self, signum: int) -> None:
+            if self.forked is None:
+                await super().send_signal(signum)
+            elif zygote.exit_code(self.forked) is None:
+                try:
+                    os.killpg(self.forked, signum)
+                except OSError:
+                    with contextlib.suppress(ProcessLookupError):
+                        os.kill(self.forked, signum)
+
+        async def kill(self, restart: bool = False) -> None:
+            if self.forked is None:
+                await super().kill(restart)
+            else:
+                await self.send_signal(signal.SIGKILL)
+
+        async def terminate(self, restart: bool = False) -> None:
+            if self.forked is None:
+                await super().terminate(restart)
+            else:
+                await self.send_signal(signal.SIGTERM)
+
+    class ForkingKernelManager(AsyncKernelManager):
+        async def _async_pre_start_kernel(self, **kw: Any) -> Any:
+            if self.provisioner is None:
+                self.kernel_id = self.kernel_id or kw.pop("kernel_id", str(uuid.uuid4()))
+                self.provisioner = ForkedProvisioner(
+                    kernel_id=self.kernel_id, kernel_spec=self.kernel_spec, parent=self
+                )
+            return await super()._async_pre_start_kernel(**kw)
+
+    return ForkingKernelManager
+
+
+def _is_ipykernel(command: Sequence[str]) -> bool:
+    """Whether ``command`` runs ipykernel with this Python, as the zygote would."""
+    return (
+        len(command) >= 3
+        and list(command[1:3]) == ["-m", "ipykernel_launcher"]
+        and Path(command[0]).absolute() == Path(sys.executable).absolute()
+    )
 
 
 def main() -> None:
     """Read a notebook on stdin, run it, write it on stdout."""
-    import os
-
+    # First, before this script reads the notebook or imports nbclient: see Zygote.
+    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
     cell_seconds = int(sys.argv[1])
     # nbformat validates with jsonschema, whose optional "iri" format checker builds a grammar
     # at import (about 1.2 s, for a format no notebook uses): leave that package out.
@@ -175,10 +766,25 @@ def main() -> None:
     os.dup2(quiet, 1)
     os.dup2(quiet, 2)
     # The kernel is killed rather than asked to stop: the sandbox ends with this script.
-    executor = _guarded_execute_class()(timeout=cell_seconds, shutdown_kernel="immediate")
+    options = {"kernel_manager_class": _forking_manager_class(zygote)} if zygote else {}
+    executor = _guarded_client_class()(
+        notebook,
+        timeout=cell_seconds,
+        kernel_name=notebook.metadata.get("kernelspec", {}).get("name", "python3"),
+        allow_errors=True,
+        interrupt_on_timeout=True,
+        raise_on_iopub_timeout=True,
+        error_on_timeout=TIMEOUT_ERROR,
+        extra_arguments=["--HistoryManager.hist_file=:memory:"],
+        shutdown_kernel="immediate",
+        on_cell_executed=_record_reply_error,
+        resources={"metadata": {"path": "."}},
+        **options,
+    )
+    executor.replaced = {}
     problems = []
     try:
-        executor.preprocess(notebook, {"metadata": {"path": "."}})
+        executor.execute()
     except DeadKernelError:
         problems.append(
             "the kernel died (os._exit, a crash, or more memory than the limit); the cells "
@@ -192,14 +798,17 @@ def main() -> None:
     except Exception as error:  # the grader reports it with the notebook
         problems.append(f"the notebook stopped running: {type(error).__name__}: {error}")
         mark_not_run(notebook, f"This cell did not run: {type(error).__name__}: {error}")
-    for grade_id, changed in getattr(executor, "replaced", {}).items():
+    for grade_id, changed in executor.replaced.items():
         problems.append(
             f"before {grade_id}, the student's code had replaced {', '.join(changed)}; "
             "the originals were put back for the test"
         )
+    problems += limit_outputs(notebook)
     notebook.metadata[METADATA_KEY] = {"problems": problems}
     answer.write(nbformat.writes(notebook))
     answer.flush()
+    if zygote is not None:
+        zygote.close()
     os._exit(0)  # nothing left to clean up: the sandbox and all in it end with this process
 
 

@@ -109,15 +109,34 @@ def _driving_section(result: StudentResult) -> List[str]:
     parts = [f"<h2>Driving the mission: {driving.score:g} / {MAX_SCORE:g}</h2>"]
     labels = {
         "bag": "a readable bag with the mission's states",
-        "states": "the states and LED colours in order",
+        "states": "the states and LED colours in order, then 'done'",
         "stops": "every stop held for its time, standing still",
-        "closure": "the robot ended near its start",
     }
     parts.append("<table><tr><th>Check</th><th>Points</th></tr>")
-    for key, most in POINTS.items():
+    for key, most in (driving.out_of or POINTS).items():
         got = driving.parts.get(key, 0.0)
-        parts.append(f"<tr><td>{_e(labels[key])}</td><td>{got:g} / {most:g}</td></tr>")
+        label = labels.get(key, f"what the robot really did in state {key}")
+        parts.append(f"<tr><td>{_e(label)}</td><td>{got:g} / {most:g}</td></tr>")
     parts.append("</table>")
+    motion = [state for state in (driving.summary or {}).get("motion", []) if state.get("checks")]
+    if motion:
+        parts.append(
+            "<table><tr><th>State</th><th>Move</th><th>Measured</th><th>Asked for</th>"
+            "<th>Result</th></tr>"
+        )
+        for state in motion:
+            for check in state["checks"]:
+                unit = check.get("unit", "")
+                measured = check.get("measured")
+                shown = "nothing" if measured is None else f"{measured:g} {unit}"
+                verdict = "passed" if check.get("passed") else "failed"
+                parts.append(
+                    f"<tr><td>{_e(state.get('state'))}</td><td>{_e(check.get('what'))}</td>"
+                    f"<td>{_e(shown)}</td><td>{_e(check.get('expected'))} {_e(unit)}</td>"
+                    f'<td><span class="{"pass" if check.get("passed") else "fail"}">'
+                    f"{verdict}</span></td></tr>"
+                )
+        parts.append("</table>")
     if driving.reasons:
         items = "".join(f"<li>{_e(reason)}</li>" for reason in driving.reasons)
         parts.append(f'<div class="note"><ul>{items}</ul></div>')

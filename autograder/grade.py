@@ -1,16 +1,20 @@
-"""Grading a class: real ``nbgrader autograde`` per student, student code in a sandbox, in parallel.
+"""Grading a class: real ``nbgrader autograde`` per student, each student a task on Dask.
 
-nbgrader's autograde does two kinds of work: the instructor's (restore the instructor's cells
-and hidden tests from the gradebook, save the scores into it) and the student's (run the
-notebook). Here the first stays with nbgrader, in this process, as the gradebook's one writer;
-the second is handed, by a preprocessor that takes the place of nbgrader's ``Execute``, to
-:mod:`autograder.execute` running inside the sandbox of :mod:`autograder.sandbox`. Several
-students are graded at once by threads: while one student's notebook runs in its sandbox, the
-others' bookkeeping goes on; every gradebook access holds one lock, so grades are written one
-at a time and none is lost. Each sandbox has its own network namespace, so the kernels' ports
-never collide (the race plain nbgrader has when run in parallel). What comes back from the
-sandbox is read as data: the executed notebook's error outputs name the cells outside the tests
-that raised (:func:`raised_outside_tests`), judged on the notebook this process sent.
+Each student's grading is a unit of its own (:mod:`autograder.unit`): a process that repairs
+their notebooks, autogrades them with nbgrader on a private copy of the gradebook, runs their
+cells in the sandbox and drives the mission with their exported code. Units are tasks of Dask
+distributed: on a local cluster of ``jobs`` worker processes by default, or on an existing
+cluster (``scheduler``: one started by dask-jobqueue on Slurm, by dask-kubernetes...), whose
+workers need only the course's Python environment and bubblewrap. A worker that dies takes
+no student with it: Dask runs its tasks again elsewhere.
+
+This process is the one writer of the class's results. It reads each student's files itself,
+safely (:mod:`autograder.files`: regular files only, no links, sizes bounded) and hands the
+bytes to the task; when a student's result comes back it is written at once, each file whole
+or not at all: the gradebook (``work/gradebook.db``, the scores nbgrader's formgrader shows),
+the autograded notebooks, ``feedback/STUDENT.html``, ``results/STUDENT.json`` and
+``grades.csv``. A crash or Ctrl-C loses only the students in flight; running again grades only
+the students whose files changed, who are new, or whose grading stopped.
 
 Input: a folder with one folder (or ``.zip``) per student, holding their assignment folders
 (a copy of ``course/``), or nbgrader's own ``submitted/STUDENT/ASSIGNMENT`` layout.
@@ -19,428 +23,280 @@ Input: a folder with one folder (or ``.zip``) per student, holding their assignm
 from __future__ import annotations
 
 import csv
+import dataclasses
+import hashlib
+import io
 import json
+import logging
 import os
-import shutil
-import subprocess
-import sys
+import stat
+import tarfile
 import tempfile
-import threading
 import time
-import zipfile
-from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-import nbformat
-
-from autograder import sandbox
+from autograder.cascade import Dependencies
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
-from autograder.driving import Driving, drive
-from autograder.execute import METADATA_KEY, NOT_RUN, mark_not_run
-from autograder.feedback import failure_messages, write_feedback
-from autograder.sandbox import NOBODY, Limits
-from autograder.tamper import repair
-from duckielib.handin import raised_cells
+from autograder.driving import MAX_SCORE
+from autograder.feedback import write_feedback
+from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
+from autograder.results import StudentResult, from_data, to_data, write_atomic
+from autograder.sandbox import Limits
+from autograder.unit import raised_outside_tests, run_unit
 
-__all__ = ["StudentResult", "grade_class", "find_submissions", "raised_outside_tests"]
+__all__ = [
+    "StudentResult",
+    "find_submissions",
+    "grade_class",
+    "raised_outside_tests",
+    "read_submission",
+]
 
-_EXECUTE = Path(__file__).resolve().parent / "execute.py"
-_GRADEBOOK = threading.RLock()
+#: Bumped when what a unit computes changes, so results kept from before are graded again.
+GRADER_VERSION = 2
 
 
-@dataclass
-class StudentResult:
-    """What grading one student gave.
+def find_submissions(folder: Path) -> Tuple[Dict[str, Path], List[str]]:
+    """The students' folders and ``.zip`` files in ``folder``, and what was skipped (sentences).
 
-    Attributes:
-        student: the student's id (their folder's name).
-        cells: ``(assignment, grade_id) -> (score, max_score)``.
-        problems: one sentence each: what went wrong while grading (not failed tests).
-        messages: ``(assignment, grade_id) -> message`` of each failed test.
-        driving: the driving score, or None when the mission was not driven.
-        seconds: wall-clock seconds spent on this student.
+    A student's entry that is a link, a FIFO or anything but a folder or a regular ``.zip``
+    file is skipped and said.
     """
-
-    student: str
-    cells: Dict[Tuple[str, str], Tuple[float, float]] = field(default_factory=dict)
-    problems: List[str] = field(default_factory=list)
-    messages: Dict[Tuple[str, str], str] = field(default_factory=dict)
-    driving: Optional[Driving] = None
-    seconds: float = 0.0
-
-    @property
-    def total(self) -> float:
-        """The points scored, all assignments together."""
-        return sum(score for score, _ in self.cells.values())
-
-    @property
-    def max_total(self) -> float:
-        """The points there were to score."""
-        return sum(most for _, most in self.cells.values())
-
-
-def find_submissions(folder: Path, work: Path) -> Tuple[Dict[str, Path], List[str]]:
-    """The students' folders in ``folder`` (zips unpacked into ``work``), and what was skipped."""
     folder = Path(folder)
     if (folder / "submitted").is_dir():
         folder = folder / "submitted"
     found: Dict[str, Path] = {}
     skipped: List[str] = []
-    for entry in sorted(folder.iterdir()):
-        name = entry.stem if entry.suffix == ".zip" else entry.name
+    for entry in sorted(os.scandir(folder), key=lambda item: item.name):
+        path = Path(entry.path)
+        name = path.stem if path.suffix == ".zip" else entry.name
         if name.startswith("."):
             continue
-        if entry.is_dir():
-            found[name] = entry
-        elif entry.suffix == ".zip":
-            target = work / "unzipped" / name
-            try:
-                with zipfile.ZipFile(entry) as archive:
-                    for member in archive.namelist():
-                        if member.startswith("/") or ".." in Path(member).parts:
-                            raise zipfile.BadZipFile(f"unsafe path {member!r}")
-                    archive.extractall(target)
-            except zipfile.BadZipFile as error:
-                skipped.append(f"{entry.name}: not a readable zip ({error})")
+        mode = entry.stat(follow_symlinks=False).st_mode
+        if stat.S_ISDIR(mode) or (stat.S_ISREG(mode) and path.suffix == ".zip"):
+            if name in found:
+                skipped.append(f"{entry.name}: {name} has a folder too; the folder is graded")
                 continue
-            inner = [path for path in target.iterdir() if path.is_dir()]
-            found[name] = inner[0] if len(inner) == 1 and not _has_assignment(target) else target
+            found[name] = path
+        elif stat.S_ISLNK(mode):
+            skipped.append(f"{entry.name}: a symbolic link, not a student's folder")
         else:
             skipped.append(f"{entry.name}: neither a folder nor a .zip")
     return found, skipped
 
 
-def _has_assignment(folder: Path) -> bool:
-    return any(folder.glob("*/*.ipynb"))
+def read_submission(path: Path, course: List[str]) -> Collected:
+    """A student's files of the assignments ``course``, read safely from a folder or a zip.
 
-
-def _sandboxed_execute_class(
-    limits: Limits,
-    use_sandbox: bool,
-    folders: Dict[str, Tuple[Path, Path]],
-    notes: Dict[str, List[str]],
-):
-    """The class that takes the place of nbgrader's Execute: the notebook runs in the sandbox."""
-    from nbgrader.preprocessors import Execute
-
-    class SandboxedExecute(Execute):
-        def preprocess(self, nb, resources):
-            key = f"{resources['nbgrader']['student']}/{resources['nbgrader']['assignment']}"
-            folder, view = folders[key]
-            command = [sys.executable, str(_EXECUTE), str(limits.cell_seconds)]
-            text = nbformat.writes(nb)
-            _GRADEBOOK.release()  # others may use the gradebook while this notebook runs
-            try:
-                result = sandbox.run(
-                    command,
-                    folder,
-                    limits,
-                    limits.submission_seconds,
-                    use_sandbox=use_sandbox,
-                    stdin=text,
-                    course=view,
-                )
-                output = result.stdout
-                problem = None if output.strip() else (result.stderr.strip()[-500:] or "no output")
-            except subprocess.TimeoutExpired:
-                output, problem = "", f"stopped after {limits.submission_seconds} s"
-            finally:
-                _GRADEBOOK.acquire()
-            if problem is not None:
-                mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
-                notes.setdefault(key, []).append(
-                    f"{resources['nbgrader']['assignment']}: the notebook {problem}"
-                )
-                return nb, resources
-            executed = nbformat.reads(output, as_version=4)
-            found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
-            assignment = resources["nbgrader"]["assignment"]
-            notes.setdefault(key, []).extend(f"{assignment}: {problem}" for problem in found)
-            raised = raised_outside_tests(assignment, nb, executed, limits.cell_seconds)
-            if raised is not None:
-                notes[key].append(raised)
-            return executed, resources
-
-    return SandboxedExecute
-
-
-def raised_outside_tests(
-    assignment: str, sent: Any, executed: Any, cell_seconds: Optional[int] = None
-) -> Optional[str]:
-    """One sentence naming every cell outside the test cells that raised, or None if none did.
-
-    Which cells are tests, where each cell is and what it says come from ``sent``: the notebook
-    this process handed to the run, rebuilt on the release's instructor cells
-    (:func:`autograder.tamper.repair`, then nbgrader's own restoring from the gradebook), so a
-    student cannot turn a cell into a test or out of one. Only the error outputs are read from
-    ``executed``, what came back from the run, and only as text. Cells that never ran because
-    the kernel died (the ``NotRun`` error of :func:`autograder.execute.mark_not_run`) are left
-    out: the kernel's death is a problem of its own.
-
-    Args:
-        assignment: the assignment's name, which starts the sentence.
-        sent: the notebook as sent to be run.
-        executed: the same notebook as it came back, with its outputs.
-        cell_seconds: the time limit of a cell, quoted for a cell that ran out of it.
-    """
-    raised = [
-        cell
-        for cell in raised_cells(sent.cells, executed.cells, cell_seconds, skip=(NOT_RUN,))
-        if not sent.cells[cell.number - 1].get("metadata", {}).get("nbgrader", {}).get("grade")
-    ]
-    if not raised:
-        return None
-    cells = "1 cell" if len(raised) == 1 else f"{len(raised)} cells"
-    found = "; ".join(cell.describe() for cell in raised)
-    return f"{assignment}: {cells} outside the tests raised: {found}"
-
-
-def _links(directory: str, names: List[str]) -> List[str]:
-    """The symbolic links among ``names`` (for ``shutil.copytree``'s ``ignore``)."""
-    return [name for name in names if (Path(directory) / name).is_symlink()]
-
-
-def _prepare_folder(work: Path, student: str, assignment: str, source: Path, notebook) -> Path:
-    """The writable folder a student's notebook runs in: their assignment's files.
-
-    It holds the student's data files and their (repaired) notebook, which notebooks that load
-    their neighbours read from ``..``. Left out: symbolic links (one pointing outside would
-    hand the sandbox a file of the grader's) and Python modules (a ``numpy.py`` next to the
-    notebook would stand in for numpy in the tests).
-    """
-    folder = work / "sandboxes" / student / assignment
-    if folder.exists():
-        shutil.rmtree(folder)
-    skipped = shutil.ignore_patterns("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
-    shutil.copytree(
-        source, folder, ignore=lambda where, names: [*_links(where, names), *skipped(where, names)]
-    )
-    nbformat.write(notebook, folder / f"{assignment}.ipynb")
-    for path in [folder.parent, folder, *folder.rglob("*")]:
-        os.chown(path, NOBODY, NOBODY, follow_symlinks=False)
-    return folder
-
-
-def grade_class(
-    submissions: Path,
-    out: Path,
-    jobs: int = 1,
-    limits: Optional[Limits] = None,
-    use_sandbox: bool = True,
-    names: Optional[List[str]] = None,
-    source: Path = ROOT / "solutions",
-    progress: Optional[Callable[[str], None]] = None,
-    driving: bool = True,
-) -> List[StudentResult]:
-    """Autograde every student of ``submissions`` into ``out``.
-
-    Writes ``out/grades.csv`` (one row per student), ``out/feedback/STUDENT.html`` and
-    ``out/skipped.json`` (what in ``submissions`` was not a student's folder).
-
-    Args:
-        submissions: one folder (or ``.zip``) per student, or nbgrader's ``submitted/`` layout.
-        out: the results' folder; its ``work/`` holds the gradebook and nbgrader's trees.
-        jobs: how many students are graded at once.
-        limits: what each submission may use (default :class:`Limits`).
-        use_sandbox: whether student code runs in the sandbox (off: with your rights).
-        names: the assignments to grade (default: all of ``source``).
-        source: the course source, whose hidden tests are run.
-        progress: called with one line after each student.
-        driving: whether each student's export drives the mission (the driving score).
-
-    Returns:
-        One result per student, in name order.
+    The files are keyed ``"NAME/relative/path"``. A zip (or folder) holding one folder that
+    holds the assignments is read from that folder. Everything else is left out silently;
+    what is left out of the assignments' folders is said.
 
     Raises:
-        CourseError: if nbgrader cannot set the assignments up.
+        UnsafeFile: if a zip cannot be read or holds paths outside itself.
     """
-    limits = limits or Limits()
-    out = Path(out).resolve()
-    work = out / "work"
-    work.mkdir(parents=True, exist_ok=True)
-    source = Path(source).resolve()
-    names = list(names) if names is not None else assignments(source)
-    students, skipped = find_submissions(Path(submissions), work)
-    folders: Dict[str, Tuple[Path, Path]] = {}
-    notes: Dict[str, List[str]] = {}
+    wanted = set(course)
+    if path.is_dir() and not path.is_symlink():
+        if not any((path / name).is_dir() for name in wanted):
+            inner = [
+                entry
+                for entry in os.scandir(path)
+                if entry.is_dir(follow_symlinks=False) and not entry.name.startswith(".")
+            ]
+            if len(inner) == 1:
+                path = Path(inner[0].path)
+        collected = Collected()
+        for name in course:
+            folder = path / name
+            if folder.is_symlink():
+                collected.left_out.append(f"{name}/ is a symbolic link; it was left out.")
+                continue
+            if not folder.is_dir():
+                continue
+            part = collect_folder(folder, skip=(".*", "__pycache__", "*.pyc"))
+            collected.files.update({f"{name}/{key}": data for key, data in part.files.items()})
+            collected.left_out += [f"{name}/{said}" for said in part.left_out]
+        return collected
+    unpacked = unpack_zip(path)
+    tops = {PurePosixPath(key).parts[0] for key in unpacked.files}
+    if not tops & wanted and len(tops) == 1:
+        (top,) = tops
+        unpacked.files = {key[len(top) + 1 :]: value for key, value in unpacked.files.items()}
+    unpacked.files = {
+        key: value
+        for key, value in unpacked.files.items()
+        if PurePosixPath(key).parts[0] in wanted
+        and not any(_hidden(part) for part in PurePosixPath(key).parts)
+    }
+    return unpacked
+
+
+def _left_out(lines: List[str], names: List[str]) -> List[str]:
+    """What was left out of the graded assignments' folders, as ``NAME: sentence``."""
+    said = []
+    for line in lines:
+        name, _, rest = line.partition("/")
+        if name in names and rest:
+            said.append(f"{name}: {rest}")
+        elif not rest:
+            said.append(line[:1].upper() + line[1:])
+    return said
+
+
+def _hidden(part: str) -> bool:
+    return part.startswith(".") or part == "__pycache__"
+
+
+def _fingerprint(*parts: Any) -> str:
+    """One hash of bytes and JSON-able values, in order."""
+    digest = hashlib.sha256()
+    for part in parts:
+        raw = part if isinstance(part, bytes) else json.dumps(part, sort_keys=True).encode()
+        digest.update(hashlib.sha256(raw).digest())
+    return digest.hexdigest()
+
+
+def _files_fingerprint(files: Dict[str, bytes]) -> str:
+    return _fingerprint(*[name.encode() + b"\0" + files[name] for name in sorted(files)])
+
+
+@dataclasses.dataclass
+class _Course:
+    """What every unit of the class needs: the source, the release, the gradebook's copy."""
+
+    blob: bytes
+    key: str
+    cells: Dict[Tuple[str, str], float]
+
+
+def _set_up(work: Path, source: Path, course: List[str], names: List[str]) -> _Course:
+    """Generate the assignments into the class's gradebook, and pack what the units need."""
     config = nbgrader_config(root=work, release="release", db=work / "gradebook.db", source=source)
-    config.CourseDirectory.submitted_directory = "submitted"
-    config.CourseDirectory.autograded_directory = "autograded"
-    execute = _sandboxed_execute_class(limits, use_sandbox, folders, notes)
-    config.Autograde.autograde_preprocessors = [
-        execute if getattr(pp, "__name__", "") == "Execute" else pp
-        for pp in _default_autograde_preprocessors()
-    ]
-    api = _api(config)
-    # The driving score exports the whole course: every notebook is then repaired and laid out.
-    course = sorted(set(assignments(source)) | set(names)) if driving else list(names)
-    with _GRADEBOOK:
+    key = _fingerprint(
+        GRADER_VERSION,
+        course,
+        *[
+            path.relative_to(source).as_posix().encode() + path.read_bytes()
+            for path in sorted(source.rglob("*"))
+            if path.is_file()
+        ],
+    )
+    stamp = work / "course.json"
+    if not (stamp.is_file() and json.loads(stamp.read_text()).get("key") == key):
+        api = _api(config)
         for name in course:
             result = api.generate_assignment(name, force=True)
             if not result["success"]:
                 raise CourseError(f"nbgrader could not set up {name}:\n{_log_tail(result)}")
-    (out / "feedback").mkdir(exist_ok=True)
-    run = _Run(api, config, out, names, students, folders, notes, max(1, jobs), progress)
-    run.limits, run.use_sandbox, run.driving = limits, use_sandbox, driving
-    run.course = course
-    cwd = Path.cwd()
-    # nbgrader 0.9 sets NBGRADER_EXECUTION around each execution and then restores the value
-    # of the variable named by its *value* ("autograde"; a slip in nbgrader.utils.setenv),
-    # deleting it when that is unset: two threads would delete it under each other. With
-    # both set for the whole run, every restore just writes "autograde" back.
-    before = {key: os.environ.get(key) for key in ("NBGRADER_EXECUTION", "autograde")}
-    os.environ.update(NBGRADER_EXECUTION="autograde", autograde="autograde")
-    try:
-        with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
-            results = list(pool.map(run.grade, sorted(students)))
-    finally:
-        os.chdir(cwd)  # nbgrader's converters change directory while they run
-        for key, value in before.items():
-            if value is None:
-                os.environ.pop(key, None)
-            else:
-                os.environ[key] = value
-    _write_csv(out / "grades.csv", results)
-    (out / "skipped.json").write_text(json.dumps(skipped, indent=2) + "\n")
-    return results
+        write_atomic(stamp, json.dumps({"key": key}))
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode="w:gz") as archive:
+        archive.add(source, "source")
+        for name in course:
+            archive.add(work / "release" / name, f"release/{name}")
+        archive.add(work / "gradebook.db", "gradebook.db")
+    from nbgrader.api import Gradebook
 
-
-@dataclass
-class _Run:
-    """One class's grading: what each thread needs to grade a student."""
-
-    api: Any
-    config: Any
-    out: Path
-    names: List[str]
-    students: Dict[str, Path]
-    folders: Dict[str, Tuple[Path, Path]]
-    notes: Dict[str, List[str]]
-    jobs: int
-    progress: Optional[Callable[[str], None]]
-    limits: Limits = field(default_factory=Limits)
-    use_sandbox: bool = True
-    driving: bool = True
-    course: List[str] = field(default_factory=list)
-    started: float = field(default_factory=time.monotonic)
-    done: List[StudentResult] = field(default_factory=list)
-
-    @property
-    def work(self) -> Path:
-        """The nbgrader course root: the gradebook, ``submitted/`` and ``autograded/``."""
-        return self.out / "work"
-
-    def _hand_in(self, student: str, name: str, result: StudentResult) -> bool:
-        """Put one assignment, repaired, where nbgrader grades it and where it runs.
-
-        Returns:
-            Whether the student handed it in.
-        """
-        submitted = self.students[student] / name
-        handed_in = submitted / f"{name}.ipynb"
-        if not (handed_in.is_file() or handed_in.is_symlink()):
-            result.problems.append(f"{name}: no {name}.ipynb in the submission")
-            return False
-        target = self.work / "submitted" / student / name
-        if target.exists():
-            shutil.rmtree(target)
-        # Without links: writing the repaired notebook through one would overwrite its target.
-        shutil.copytree(submitted, target, ignore=_links)
-        # Graded on the instructor's cells: deleted, duplicated or renamed ones put back,
-        # an unreadable notebook replaced by the release (see autograder.tamper).
-        release = self.work / "release" / name / f"{name}.ipynb"
-        if handed_in.is_symlink():  # never read a file of the grader's in its place
-            result.problems.append(f"{name}: the notebook is a link; the release was graded")
-            handed_in = release
-        notebook, found = repair(handed_in, release)
-        result.problems += found
-        nbformat.write(notebook, target / f"{name}.ipynb")
-        _prepare_folder(self.work, student, name, submitted, notebook)
-        return True
-
-    def grade(self, student: str) -> StudentResult:
-        """Autograde every assignment of one student (in a worker thread)."""
-        began = time.monotonic()
-        result = StudentResult(student)
-        view = self.work / "sandboxes" / student
-        # Every notebook is repaired and laid out (the driving score exports them all), but
-        # only those graded are reported on.
-        aside = StudentResult(student)
-        handed_in = [
-            name
-            for name in self.course
-            if self._hand_in(student, name, result if name in self.names else aside)
-            and name in self.names
-        ]
-        for name in handed_in:
-            key = f"{student}/{name}"
-            self.folders[key] = (view / name, view)
-            with _GRADEBOOK:
-                outcome = self.api.autograde(name, student, force=True, create=True)
-            result.problems += self.notes.get(key, [])
-            if not outcome["success"]:
-                result.problems.append(f"{name}: nbgrader could not grade it ({_why(outcome)})")
-            graded = self.work / "autograded" / student / name / f"{name}.ipynb"
-            for grade_id, message in failure_messages(graded).items():
-                result.messages[(name, grade_id)] = message
-        with _GRADEBOOK:
-            _read_scores(self.config, result, self.names)
-        if self.driving:
-            # From the repaired copies: a notebook linked to a file of the grader's (the
-            # reference solutions) is never exported.
-            box = self.work / "driving" / student
-            result.driving = drive(view, box, self.limits, self.use_sandbox)
-        write_feedback(self.out / "feedback" / f"{student}.html", result, self.names)
-        result.seconds = time.monotonic() - began
-        self.done.append(result)
-        if self.progress is not None:
-            count, total = len(self.done), len(self.students)
-            per_student = (time.monotonic() - self.started) / count
-            failed = sum(1 for item in self.done if item.problems)
-            self.progress(
-                f"{count}/{total} graded ({failed} with problems), "
-                f"about {(total - count) * per_student:.0f} s left"
-            )
-        return result
-
-
-def _default_autograde_preprocessors() -> list:
-    from nbgrader.converters import Autograde
-
-    return list(Autograde.class_traits()["autograde_preprocessors"].default())
-
-
-def _why(outcome: Dict[str, object]) -> str:
-    lines = [line for line in _log_tail(outcome).splitlines() if line.strip()]
-    return lines[-1][:300] if lines else "no log"
-
-
-def _read_scores(config: object, result: StudentResult, names: List[str]) -> None:
-    """The student's scores from the gradebook; a test never graded scores 0 of its points."""
-    from nbgrader.api import Gradebook, MissingEntry
-
-    with Gradebook(config.CourseDirectory.db_url) as gradebook:  # type: ignore[attr-defined]
+    cells: Dict[Tuple[str, str], float] = {}
+    with Gradebook(config.CourseDirectory.db_url) as gradebook:
         for name in names:
             for notebook in gradebook.find_assignment(name).notebooks:
                 for cell in notebook.grade_cells:
-                    result.cells[(name, cell.name)] = (0.0, float(cell.max_score))
-            try:
-                submission = gradebook.find_submission(name, result.student)
-            except MissingEntry:
-                continue
-            for notebook in submission.notebooks:
-                for grade in notebook.grades:
-                    result.cells[(name, grade.name)] = (float(grade.score), float(grade.max_score))
+                    cells[(name, cell.name)] = float(cell.max_score)
+    return _Course(buffer.getvalue(), key, cells)
 
 
-def _write_csv(path: Path, results: List[StudentResult]) -> None:
-    columns = sorted({key for result in results for key in result.cells})
-    with tempfile.NamedTemporaryFile(
-        "w", dir=path.parent, delete=False, newline="", suffix=".tmp"
-    ) as handle:
-        writer = csv.writer(handle)
+_UNPACKED: Dict[str, Path] = {}
+
+
+def _grade_on_worker(
+    task: Dict[str, Any], files: Dict[str, bytes], key: str, blob: bytes
+) -> Dict[str, Any]:
+    """The Dask task: one student's unit, on whichever worker runs it."""
+    course = _UNPACKED.get(key)
+    if course is None or not course.is_dir():
+        course = Path(tempfile.mkdtemp(prefix="duckie-course-"))
+        with tarfile.open(fileobj=io.BytesIO(blob), mode="r:gz") as archive:
+            archive.extractall(course, filter="data")
+        _UNPACKED[key] = course
+    return run_unit(task, files, course)
+
+
+@dataclasses.dataclass
+class _Writer:
+    """The one writer of the class's results."""
+
+    out: Path
+    names: List[str]
+    cells: Dict[Tuple[str, str], float]
+    db_url: str
+    dependencies: Optional[Dependencies] = None
+    results: Dict[str, StudentResult] = dataclasses.field(default_factory=dict)
+
+    def record(self, result: StudentResult, autograded: Dict[str, str], key: str) -> None:
+        """Keep one student's result: gradebook, notebooks, feedback, JSON, the class's CSV."""
+        for cell, most in self.cells.items():
+            result.cells.setdefault(cell, (0.0, most))
+        result.cells = {cell: result.cells[cell] for cell in sorted(result.cells)}
+        self._explain(result)
+        self._save_grades(result, sorted(autograded))
+        for name, text in autograded.items():
+            path = self.out / "work" / "autograded" / result.student / name / f"{name}.ipynb"
+            write_atomic(path, text)
+        page = self.out / "feedback" / f"{result.student}.html"
+        with tempfile.TemporaryDirectory(dir=self.out / "feedback") as staging:
+            write_feedback(Path(staging) / page.name, result, self.names)
+            (Path(staging) / page.name).replace(page)
+        data = {"key": key, **to_data(result)}
+        write_atomic(self.out / "results" / f"{result.student}.json", json.dumps(data, indent=1))
+        self.results[result.student] = result
+        self.write_csv()
+
+    def _explain(self, result: StudentResult) -> None:
+        """Name first the function a failure builds on, when that function fails its own test."""
+        if self.dependencies is None:
+            return
+        failed = {cell for cell, (score, most) in result.cells.items() if score < most}
+        explained = self.dependencies.explain(
+            {cell: result.messages.get(cell, "") for cell in failed}
+        )
+        for cell, message in explained.items():
+            if message.strip() != result.messages.get(cell, "").strip():
+                result.messages[cell] = message.strip()
+        driving = result.driving
+        if driving is not None and driving.score < MAX_SCORE:
+            note = self.dependencies.driving_note(failed)
+            if note is not None:
+                driving.reasons.insert(0, note)
+
+    def _save_grades(self, result: StudentResult, graded: List[str]) -> None:
+        """The student's scores into the class's gradebook, where nbgrader's tools read them.
+
+        Only the assignments that were autograded get a submission, as ``nbgrader autograde``
+        gives them.
+        """
+        from nbgrader.api import Gradebook, MissingEntry
+
+        scores = dict(result.cells)
+        with Gradebook(self.db_url) as gradebook:
+            gradebook.update_or_create_student(result.student)
+            for name in graded:
+                try:
+                    submission = gradebook.find_submission(name, result.student)
+                except MissingEntry:
+                    submission = gradebook.add_submission(name, result.student)
+                for notebook in submission.notebooks:
+                    for grade in notebook.grades:
+                        if (name, grade.name) in scores:
+                            grade.auto_score = scores[(name, grade.name)][0]
+            gradebook.db.commit()
+
+    def write_csv(self) -> None:
+        results = [self.results[name] for name in sorted(self.results)]
+        columns = sorted({key for result in results for key in result.cells})
+        buffer = io.StringIO()
+        writer = csv.writer(buffer)
         writer.writerow(
             ["student", "total", "max_total", "driving_score", "problems", "driving_problems"]
             + [f"{assignment}:{grade_id}" for assignment, grade_id in columns]
@@ -458,4 +314,202 @@ def _write_csv(path: Path, results: List[StudentResult]) -> None:
                 ]
                 + [f"{result.cells[key][0]:g}" if key in result.cells else "" for key in columns]
             )
-    Path(handle.name).replace(path)
+        write_atomic(self.out / "grades.csv", buffer.getvalue())
+
+
+def _kept(out: Path, student: str, key: str) -> Optional[StudentResult]:
+    """The result kept from an earlier run for the same files and course, if whole."""
+    path = out / "results" / f"{student}.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if data.get("key") != key or not data.get("complete", True):
+        return None
+    try:
+        return from_data(data)
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _client(jobs: int, scheduler: Optional[str]) -> Tuple[Any, Any]:
+    """A Dask client: of the cluster at ``scheduler``, or of a local one with ``jobs`` workers."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="30s"), None
+        except OSError as error:
+            raise CourseError(
+                f"No Dask scheduler answered at {scheduler} ({error}); start one with "
+                "`dask scheduler`, or leave out --scheduler to grade on this machine."
+            ) from None
+    cluster = LocalCluster(
+        n_workers=jobs,
+        threads_per_worker=1,
+        processes=True,
+        dashboard_address=None,
+        silence_logs=logging.ERROR,
+        # A worker's memory is its units' business (each is a process of its own).
+        memory_limit=0,
+    )
+    return Client(cluster), cluster
+
+
+def grade_class(
+    submissions: Path,
+    out: Path,
+    jobs: int = 1,
+    limits: Optional[Limits] = None,
+    use_sandbox: bool = True,
+    names: Optional[List[str]] = None,
+    source: Path = ROOT / "solutions",
+    progress: Optional[Callable[[str], None]] = None,
+    driving: bool = True,
+    scheduler: Optional[str] = None,
+) -> List[StudentResult]:
+    """Autograde every student of ``submissions`` into ``out``, each student a Dask task.
+
+    Writes, as each student finishes: ``out/grades.csv`` (one row per student graded so far),
+    ``out/feedback/STUDENT.html``, ``out/results/STUDENT.json`` and the gradebook
+    ``out/work/gradebook.db``; and ``out/skipped.json`` (what in ``submissions`` was not a
+    student's folder). Students whose files and course are unchanged since a finished earlier
+    run into the same ``out`` are not graded again.
+
+    Args:
+        submissions: one folder (or ``.zip``) per student, or nbgrader's ``submitted/`` layout.
+        out: the results' folder; its ``work/`` holds the gradebook and nbgrader's trees.
+        jobs: the local cluster's workers: how many students are graded at once.
+        limits: what each submission may use (default :class:`Limits`).
+        use_sandbox: whether student code runs in the sandbox (off: with your rights).
+        names: the assignments to grade (default: all of ``source``).
+        source: the course source, whose hidden tests are run.
+        progress: called with one line after each student.
+        driving: whether each student's export drives the mission (the driving score).
+        scheduler: the address of a running Dask scheduler (``tcp://host:8786``); None: a
+            local cluster.
+
+    Returns:
+        One result per student, in name order.
+
+    Raises:
+        CourseError: if nbgrader cannot set the assignments up, or the scheduler is not there.
+    """
+    limits = limits or Limits()
+    out = Path(out).resolve()
+    work = out / "work"
+    work.mkdir(parents=True, exist_ok=True)
+    (out / "feedback").mkdir(exist_ok=True)
+    source = Path(source).resolve()
+    names = list(names) if names is not None else assignments(source)
+    # The driving score exports the whole course: every notebook is then repaired and laid out.
+    course = sorted(set(assignments(source)) | set(names)) if driving else list(names)
+    students, skipped = find_submissions(Path(submissions))
+    write_atomic(out / "skipped.json", json.dumps(skipped, indent=2) + "\n")
+    setup = _set_up(work, source, course, names)
+    writer = _Writer(
+        out,
+        names,
+        setup.cells,
+        f"sqlite:///{work / 'gradebook.db'}",
+        Dependencies.from_source(source),
+    )
+    options = {
+        "names": names,
+        "course": course,
+        "limits": dataclasses.asdict(limits),
+        "use_sandbox": use_sandbox,
+        "driving": driving,
+    }
+    started = time.monotonic()
+    pending: List[Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]] = []
+    for student in sorted(students):
+        try:
+            collected = read_submission(students[student], course)
+        except UnsafeFile as error:
+            collected, refused = Collected(), f"the submission was not graded: {error}"
+            collected.left_out.append(refused)
+        files = _files_fingerprint(collected.files)
+        key = _fingerprint(setup.key, options, files, collected.left_out)
+        kept = _kept(out, student, key)
+        if kept is not None:
+            writer.results[student] = kept
+            continue
+        said = _left_out(collected.left_out, names)
+        pending.append((student, {**options, "student": student}, collected.files, key, said))
+    writer.write_csv()
+    if pending:
+        _run(pending, setup, writer, jobs, scheduler, progress, started, len(students))
+    return [writer.results[name] for name in sorted(writer.results)]
+
+
+def _run(
+    pending: List[Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]],
+    setup: _Course,
+    writer: _Writer,
+    jobs: int,
+    scheduler: Optional[str],
+    progress: Optional[Callable[[str], None]],
+    started: float,
+    total: int,
+) -> None:
+    """Run the units on the cluster and record each result as it arrives."""
+    from distributed import as_completed
+
+    client, cluster = _client(max(1, jobs), scheduler)
+    try:
+        blob = client.scatter(setup.blob, broadcast=True)
+        workers = max(1, len(client.scheduler_info().get("workers", {})) or jobs)
+        queue = iter(pending)
+        futures: Dict[Any, Tuple[str, str, List[str], float]] = {}
+
+        def submit() -> bool:
+            item = next(queue, None)
+            if item is None:
+                return False
+            student, task, files, key, said = item
+            future = client.submit(
+                _grade_on_worker, task, files, setup.key, blob, key=f"grade-{student}-{key[:12]}",
+                pure=False,
+            )  # fmt: skip
+            futures[future] = (student, key, said, time.monotonic())
+            return True
+
+        # A few students per worker in flight: their files are in memory until they are sent.
+        for _ in range(2 * workers):
+            if not submit():
+                break
+        flow = as_completed(list(futures))
+        for done, future in enumerate(flow, start=1):
+            student, key, said, began = futures.pop(future)
+            try:
+                answer = future.result()
+                result = from_data(answer["result"])
+                autograded = answer.get("autograded", {})
+            except Exception as error:  # a worker lost for good, a task that raised
+                result = StudentResult(
+                    student,
+                    problems=[
+                        f"Grading stopped: {type(error).__name__}: {str(error)[:300]}; run "
+                        "duckie grade again to retry."
+                    ],
+                    complete=False,
+                )
+                autograded = {}
+            result.problems = said + result.problems
+            result.seconds = time.monotonic() - began
+            writer.record(result, autograded, key)
+            if submit():
+                flow.add(list(futures)[-1])
+            if progress is not None:
+                count = len(writer.results)
+                failed = sum(1 for item in writer.results.values() if item.problems)
+                per_student = (time.monotonic() - started) / done
+                progress(
+                    f"{count}/{total} graded ({failed} with problems), "
+                    f"about {(total - count) * per_student:.0f} s left"
+                )
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()

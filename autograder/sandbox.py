@@ -18,6 +18,7 @@ subprocess timeout here).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import subprocess
@@ -39,6 +40,8 @@ __all__ = [
 
 #: The unprivileged user and group the code runs as.
 NOBODY = 65534
+#: The first of the user ids given to students' gradings (:func:`unit_user`).
+FIRST_UNIT_USER = 1_000_000
 #: Where the submission's own folder appears inside the sandbox.
 INSIDE = "/sandbox"
 #: Where the student's notebooks appear (read-only) when a notebook needs its neighbours.
@@ -64,6 +67,11 @@ class Limits:
         processes: processes and threads of the sandbox user (a fork bomb stops there).
         cpu_seconds: CPU time of each process.
         mission_seconds: wall time of the driving run (the mission on the virtual Duckiebot).
+        file_bytes: the largest file a process may write (its standard output too).
+        output_bytes: the most the grader reads of a run's standard output and error.
+        uid: the unprivileged user (and group) the code runs as. The process limit counts
+            every process of that user, so each student's grading uses a user of its own
+            (:func:`unit_user`): a fork bomb cannot starve another student's sandbox.
     """
 
     cell_seconds: int = 60
@@ -72,6 +80,16 @@ class Limits:
     processes: int = 256
     cpu_seconds: int = 900
     mission_seconds: int = 180
+    file_bytes: int = 1024**3
+    output_bytes: int = 256 * 1024**2
+    uid: int = NOBODY
+
+
+def unit_user() -> int:
+    """A user id of its own for one student's grading, among 2**24 that no account uses."""
+    import secrets
+
+    return FIRST_UNIT_USER + secrets.randbelow(2**24)
 
 
 def _readonly_paths() -> List[str]:
@@ -177,8 +195,8 @@ def sandboxed_command(
         "--cap-add", "CAP_SETUID",
         "--cap-add", "CAP_SETGID",
         "setpriv",
-        f"--reuid={NOBODY}",
-        f"--regid={NOBODY}",
+        f"--reuid={limits.uid}",
+        f"--regid={limits.uid}",
         "--clear-groups",
         "--no-new-privs",
         "--inh-caps=-all",
@@ -187,6 +205,7 @@ def sandboxed_command(
         f"--as={limits.memory_bytes}",
         f"--nproc={limits.processes}",
         f"--cpu={limits.cpu_seconds}",
+        f"--fsize={limits.file_bytes}",
         "--core=0",
         "--",
         "env",
@@ -194,6 +213,8 @@ def sandboxed_command(
     ]  # fmt: skip
     base = {
         "HOME": "/tmp",
+        "USER": "student",  # the user may have no name on this machine
+        "LOGNAME": "student",
         "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin",
         "LANG": "C.UTF-8",
         "MPLBACKEND": "Agg",
@@ -201,6 +222,10 @@ def sandboxed_command(
         "JUPYTER_RUNTIME_DIR": "/tmp/jupyter",
         "IPYTHONDIR": "/tmp/ipython",
         "PYTHONDONTWRITEBYTECODE": "1",
+        # One thread per numerical library: the grader runs several sandboxes at once.
+        "OPENBLAS_NUM_THREADS": "1",
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
     }
     base.update(env or {})
     args += [f"{key}={value}" for key, value in base.items()]
@@ -219,6 +244,9 @@ def run(
 ) -> subprocess.CompletedProcess:
     """Run ``command`` in ``folder``, in the sandbox (see :func:`sandboxed_command`) unless told.
 
+    What the command prints goes to files of the grader's, not to pipes, and is read back only
+    up to ``limits.output_bytes``: a run that prints without end cannot fill the grader's memory.
+
     Args:
         command: what to run.
         folder: the writable working folder.
@@ -230,27 +258,60 @@ def run(
         course: the student's assignment folders, shown at ``/course`` (sandbox only).
 
     Returns:
-        The finished process, its output captured as text.
+        The finished process, its output captured as text (cut at ``limits.output_bytes``,
+        with a last line saying so).
 
     Raises:
-        subprocess.TimeoutExpired: if it ran longer than ``timeout``.
+        subprocess.TimeoutExpired: if it ran longer than ``timeout`` (it is killed, with
+            every process it started).
     """
+    import signal
+    import tempfile
+
     environment = None
     if use_sandbox:
         command = sandboxed_command(command, folder, limits, env=env, course=course)
     elif env:
         environment = {**os.environ, **env}
-    return subprocess.run(
-        list(command),
-        check=False,
-        input=stdin,
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        cwd=folder,
-        env=environment,
-        start_new_session=True,
-    )
+    with tempfile.TemporaryFile() as given, tempfile.TemporaryFile() as out, (
+        tempfile.TemporaryFile()
+    ) as err:
+        given.write((stdin or "").encode("utf-8"))
+        given.seek(0)
+        process = subprocess.Popen(
+            list(command),
+            stdin=given,
+            stdout=out,
+            stderr=err,
+            cwd=folder,
+            env=environment,
+            start_new_session=True,
+        )
+        try:
+            process.wait(timeout=timeout)
+        except BaseException as stopped:  # the time limit, or Ctrl-C: nothing it started stays
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+            if isinstance(stopped, subprocess.TimeoutExpired):
+                raise subprocess.TimeoutExpired(list(command), timeout) from None
+            raise
+        finally:
+            # What it left behind in its session (without the sandbox).
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(process.pid, signal.SIGKILL)
+        texts = [_bounded_text(handle, limits.output_bytes) for handle in (out, err)]
+    return subprocess.CompletedProcess(list(command), process.returncode, texts[0], texts[1])
+
+
+def _bounded_text(handle, limit: int) -> str:
+    """At most ``limit`` bytes of an output file, as text, with a line saying if it was cut."""
+    size = handle.seek(0, os.SEEK_END)
+    handle.seek(0)
+    text = handle.read(limit).decode("utf-8", errors="replace")
+    if size > limit:
+        text += f"\n[output cut: {size} bytes printed, {limit} read]\n"
+    return text
 
 
 def check_sandbox() -> None:

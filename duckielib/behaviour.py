@@ -93,6 +93,8 @@ class MissionReport:
         states: the states the bag shows, in order.
         finished: whether the mission node announced the end.
         total_time: from the first state's start to the end (or the last message), seconds.
+        started: the record time of the first announcement, in seconds: the zero of the
+            states' ``start`` and ``end`` (0 when the bag has none).
         final_pose_odometry: the last pose of the odometry, (x, y, theta), or None.
         final_pose_truth: where the robot really was at the end, (x, y, theta), or None.
         distance_to_start: true end to the mission's start, in metres, or None.
@@ -103,6 +105,7 @@ class MissionReport:
     states: List[StateRun] = field(default_factory=list)
     finished: bool = False
     total_time: float = 0.0
+    started: float = 0.0
     final_pose_odometry: Optional[Pose] = None
     final_pose_truth: Optional[Pose] = None
     distance_to_start: Optional[float] = None
@@ -284,6 +287,7 @@ def mission_report(
     odometry = _track(tracks, "odometry_node/pose")
 
     t0 = announcements[0][0] if announcements else 0.0
+    report.started = t0
     done = [t for t, name in announcements if name == DONE]
     report.finished = bool(done)
     states = [(t, name) for t, name in announcements if name != DONE]

@@ -241,16 +241,31 @@ def _grade(args: argparse.Namespace) -> int:
         print("duckie: grading WITHOUT a sandbox: student code runs with your rights.")
     else:
         check_sandbox()
-    results = grade_class(
-        submissions,
-        Path(args.out),
-        jobs=args.jobs,
-        use_sandbox=not args.no_sandbox,
-        names=args.assignment or None,
-        progress=lambda line: print(line, flush=True),
-        driving=not args.no_driving,
-    )
+    try:
+        results = grade_class(
+            submissions,
+            Path(args.out),
+            jobs=args.jobs,
+            use_sandbox=not args.no_sandbox,
+            names=args.assignment or None,
+            progress=lambda line: print(line, flush=True),
+            driving=not args.no_driving,
+            scheduler=args.scheduler,
+        )
+    except KeyboardInterrupt:
+        print(
+            "duckie: interrupted. The students graded so far are in "
+            f"{Path(args.out) / 'grades.csv'}; run the same command again to grade the others.",
+            file=sys.stderr,
+        )
+        return 130
     troubled = [result for result in results if result.problems]
+    stopped = [result.student for result in results if not result.complete]
+    if stopped:
+        print(
+            f"duckie: the grading of {len(stopped)} students stopped ({', '.join(stopped[:5])}"
+            f"{', ...' if len(stopped) > 5 else ''}); run the same command again to retry them."
+        )
     print(
         f"graded {len(results)} students ({len(troubled)} with problems): "
         f"{Path(args.out) / 'grades.csv'}, feedback pages in {Path(args.out) / 'feedback'}/"
@@ -265,7 +280,17 @@ def _add_grade(commands: argparse._SubParsersAction) -> None:
     )
     grade.add_argument("submissions", help="a folder with one folder (or .zip) per student")
     grade.add_argument("--out", required=True, help="where grades.csv and the work go")
-    grade.add_argument("--jobs", type=int, default=1, help="students graded at once")
+    grade.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="students graded at once on this machine (workers of the local Dask cluster)",
+    )
+    grade.add_argument(
+        "--scheduler",
+        help="grade on a running Dask cluster instead, given its scheduler's address "
+        "(tcp://HOST:8786); its workers need the course's environment and bubblewrap",
+    )
     grade.add_argument(
         "--assignment", action="append", help="grade only this assignment (repeatable)"
     )

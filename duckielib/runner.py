@@ -14,11 +14,14 @@ what happened to a folder::
 
 ``duckie mission`` and ``make run`` call it with the reference solution (the export of
 ``solutions/``) unless given a student's. A solution that is missing a part or fails gives the
-contract's one-sentence error naming the notebook to finish.
+contract's one-sentence error naming the notebook to finish. A run that stops early (a node
+fails, or the mission does not end in time) still writes its bag, figure and summary first,
+with the error in the summary, so what the robot did until then can be looked at and scored.
 """
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import math
@@ -226,10 +229,35 @@ def run_mission(
     _clear(folder)
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
     with modules_installed(replace_real=True):
-        namespace, simulated, wall = _drive(parts, chosen, noise, seed, files, time_limit)
+        namespace, simulated, wall, failure = _drive(parts, chosen, noise, seed, files, time_limit)
+    if failure is None:
+        return _write_run(chosen, namespace, noise, seed, label, files, simulated, wall, animation)
+    if files["bag"].is_file():
+        # What the robot did until the run stopped is worth keeping: the summary says why.
+        with contextlib.suppress(DuckielibError, ValueError, KeyError, IndexError, OSError):
+            # A bag too short to summarise: the failure below says what went wrong.
+            _write_run(
+                chosen, namespace, noise, seed, label, files, simulated, wall, False, failure
+            )
+    raise failure
 
+
+def _write_run(
+    chosen: Mission,
+    namespace: str,
+    noise: str,
+    seed: int,
+    label: str,
+    files: Dict[str, Path],
+    simulated: float,
+    wall: float,
+    animation: bool,
+    failure: Optional[DuckielibError] = None,
+) -> MissionRun:
+    """Read the run's bag and write its figure, animation and summary next to it."""
     from duckielib.bags import pose_tracks
 
+    folder = files["bag"].parent
     tracks = pose_tracks(files["bag"], "record")
     report = mission_report(files["bag"], chosen, namespace, tracks=tracks)
     summary: Dict[str, Any] = report.as_dict()
@@ -242,6 +270,7 @@ def run_mission(
             "simulated_s": round(simulated, 3),
             "wall_s": round(wall, 3),
             "realtime_factor": round(simulated / wall, 1) if wall > 0 else None,
+            "error": None if failure is None else str(failure),
         }
     )
     tracks = _named_tracks(tracks)
@@ -262,11 +291,12 @@ def _drive(
     seed: int,
     files: Dict[str, Path],
     time_limit: float,
-) -> Tuple[str, float, float]:
+) -> Tuple[str, float, float, Optional[DuckielibError]]:
     """Run the mission's nodes on a new virtual Duckiebot, recording the bag and the log.
 
     Returns:
-        The robot's namespace, the simulated seconds and the wall-clock seconds.
+        The robot's namespace, the simulated seconds, the wall-clock seconds, and the error
+        that stopped the mission early (None when it ended).
     """
     import rospy  # the in-process graph's, served by install_modules
 
@@ -319,18 +349,19 @@ def _drive(
             f"Recording the bag failed ({recorder.error}); what reached the disk is in "
             f"{recorder.active_path.name}, which duckie bag repair recovers."
         )
+    failure: Optional[DuckielibError] = None
     if crash is not None:
-        raise (SolutionError if crash.startswith("Finish notebook") else MissionError)(
+        failure = (SolutionError if crash.startswith("Finish notebook") else MissionError)(
             f"{crash} The run's log is in {files['log']}."
         )
-    if not ended:
+    elif not ended:
         last = [record.text for record in graph.log if "state" in record.text][-1:]
-        raise MissionError(
+        failure = MissionError(
             f"The mission did not announce '{DONE}' within {time_limit:.0f} simulated seconds"
             + (f" (last log: {last[0]})" if last else "")
-            + f"; the run's bag and log are in {files['log'].parent}."
+            + f". The run's bag and log are in {files['log'].parent}."
         )
-    return bot.namespace, simulated, wall
+    return bot.namespace, simulated, wall, failure
 
 
 def _named_tracks(tracks: List[Any]) -> List[Any]:

@@ -278,7 +278,9 @@ def _notebooks(folder: Path) -> List[Path]:
     found = sorted(
         path
         for path in folder.rglob("*.ipynb")
-        if ".ipynb_checkpoints" not in path.parts and not path.name.startswith(".")
+        if ".ipynb_checkpoints" not in path.parts
+        and not path.name.startswith(".")
+        and path.is_file()  # not a FIFO or a device, which would block or never end
     )
     if not found:
         raise SolutionError(

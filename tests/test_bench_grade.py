@@ -17,8 +17,14 @@ FIGURES = [
     "notebooks_per_submission",
     "nbgrader_sequential_s_per_submission",
     "grade_jobs1_s_per_submission",
+    "jobs1_unit_s_per_submission",
+    "jobs1_notebooks_s_per_submission",
+    "jobs1_cells_s_per_submission",
+    "jobs1_nbgrader_s_per_submission",
     "grade_jobs2_s_per_submission",
+    "grade_cluster2_s_per_submission",
     "all_full_marks",
+    "grade_cluster2_speedup_vs_nbgrader",
     "grade_speedup_vs_nbgrader",
 ]
 
@@ -73,7 +79,7 @@ def test_the_full_marks_check_names_the_student_and_the_cell():
 @pytest.mark.slow
 @pytest.mark.notebook
 @pytest.mark.timeout(600)
-def test_the_bench_grades_one_copy_of_one_assignment_three_ways():
+def test_the_bench_grades_one_copy_of_one_assignment_four_ways():
     if shutil.which("bwrap") is None:
         pytest.skip("bubblewrap is not installed; run `make ros`.")
     check_sandbox()
@@ -83,7 +89,15 @@ def test_the_bench_grades_one_copy_of_one_assignment_three_ways():
     assert values["submissions"] == "1"
     assert values["notebooks_per_submission"] == "1"
     assert values["all_full_marks"] == "yes"
-    for name in FIGURES[2:5] + FIGURES[-1:]:
+    timed = [name for name in FIGURES if name.endswith(("_per_submission", "_vs_nbgrader"))]
+    for name in timed:
         assert re.fullmatch(r"\d+\.\d+", values[name]), (name, values[name])
-        assert float(values[name]) > 0
+        assert float(values[name]) > 0, name
+    # The unit's parts fit in the unit; its cells run inside its notebooks' runs.
+    unit, notebooks, cells, nbgrader = (
+        float(values[f"jobs1_{part}_s_per_submission"])
+        for part in ("unit", "notebooks", "cells", "nbgrader")
+    )
+    assert cells <= notebooks <= unit
+    assert notebooks + nbgrader <= unit + 0.2
     assert figures[-1][0] == "grade_speedup_vs_nbgrader"

@@ -1,19 +1,54 @@
-"""The driving score: a student's exported code drives the mission in the sandbox."""
+"""The driving score: a student's exported code drives the mission in the sandbox.
+
+Each adversarial solution below is the reference's export with one part changed, run for real:
+a robot that only pretends to drive, missions that never end, a square turned the wrong way.
+"""
 
 from __future__ import annotations
 
+import os
 import shutil
 import struct
+import subprocess
 
 import pytest
 
 from autograder.course import ROOT
-from autograder.driving import MAX_SCORE, POINTS, drive, score_bag
+from autograder.driving import (
+    BAG_LIMIT,
+    MAX_SCORE,
+    POINTS,
+    _score_unfinished,
+    drive,
+    part_points,
+    score_bag,
+)
 from autograder.sandbox import Limits, check_sandbox
-from duckielib.runner import run_mission
+from duckielib.runner import MissionError, run_mission
 from duckielib.solution import export_solution
 
 pytestmark = pytest.mark.slow
+
+#: A mission node that announces every state in its colour and holds every stop, but sleeps
+#: instead of driving: the robot never leaves its start.
+NEVER_DRIVES = """
+
+def mission_node(mission):
+    rospy.init_node("mission_node")
+    announce = rospy.Publisher("~state", String, queue_size=10, latch=True)
+    shutdown = rospy.Publisher("shutdown", Empty, queue_size=1)
+    rospy.wait_for_service("light_service_node/set_color", timeout=10.0)
+    set_color = rospy.ServiceProxy("light_service_node/set_color", ChangePattern)
+    for state in mission.states:
+        set_color(String(data=state.color))
+        announce.publish(String(data=state.name))
+        for move in state.moves:
+            rospy.sleep(move.seconds if isinstance(move, Stop) else 2.0)
+    announce.publish(String(data="done"))
+    shutdown.publish(Empty())
+"""
+
+_DONE = 'announce.publish(String(data="done"))'
 
 
 @pytest.fixture(scope="module")
@@ -23,27 +58,139 @@ def sandbox():
     check_sandbox()
 
 
+@pytest.fixture(scope="module")
+def reference():
+    return export_solution(ROOT / "solutions").source
+
+
+def changed(reference, old, new, path):
+    """The reference solution with ``old`` replaced by ``new``, written to ``path``."""
+    assert reference.count(old) == 1, old
+    path.write_text(reference.replace(old, new), encoding="utf-8")
+    return path
+
+
+def test_the_points_split_the_driving_over_the_moving_states():
+    assert POINTS == {"bag": 5, "states": 20, "stops": 15, "motion": 60}
+    assert MAX_SCORE == 100
+    assert part_points() == {
+        "bag": 5, "states": 20, "stops": 15, "square": 20, "return": 20, "circle": 20,
+    }  # fmt: skip
+    assert part_points("d_shape")["d"] == 20
+
+
 def test_the_reference_drives_the_mission_for_full_marks(sandbox, tmp_path):
     driving = drive(ROOT / "solutions", tmp_path / "box", Limits())
     assert driving.score == MAX_SCORE == 100
-    assert driving.parts == POINTS
+    assert driving.parts == part_points()
     assert driving.reasons == []
+    assert driving.finished
     assert [state["name"] for state in driving.summary["states"]] == [
         "wait", "square", "wait", "return", "wait", "circle",
+    ]  # fmt: skip
+    assert [(m["state"], m["passed"], len(m["checks"])) for m in driving.summary["motion"]] == [
+        ("square", 6, 6), ("return", 2, 2), ("circle", 3, 3),
     ]  # fmt: skip
     assert driving.summary["distance_to_start"] < 0.05
     assert driving.figure.startswith(b"\x89PNG")
 
 
-def test_an_unfinished_course_scores_zero_with_the_students_reason(sandbox, tmp_path):
-    driving = drive(ROOT / "course", tmp_path / "box", Limits())
-    assert driving.score == 0
-    (reason,) = driving.reasons
-    assert reason.startswith("The mission could not run: Finish notebook")
-    assert "log.txt" not in reason
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_the_reference_keeps_full_marks_on_the_realistic_robot(tmp_path, seed):
+    # Measured: 100 on seeds 0 to 9 (turns within 5 degrees, sides within 1 cm, the circle's
+    # radius 0.187 m for 0.20 m); the margin is for changes to the simulator's noise.
+    run_mission(out=tmp_path / "run", noise="realistic", seed=seed, animation=False)
+    driving = score_bag(tmp_path / "run")
+    assert driving.score >= 95, driving.reasons
+    assert driving.parts["square"] >= 20 * 5 / 6
 
 
-def test_a_mission_that_never_ends_is_stopped_by_the_wall_clock(sandbox, tmp_path):
+def test_a_robot_that_never_drives_loses_every_driving_point(tmp_path, reference):
+    solution = tmp_path / "solution.py"
+    solution.write_text(reference + NEVER_DRIVES, encoding="utf-8")
+    run_mission(solution, out=tmp_path / "run", animation=False)
+    driving = score_bag(tmp_path / "run")
+    assert driving.parts == {
+        "bag": 5, "states": 20, "stops": 15, "square": 0, "return": 0, "circle": 0,
+    }  # fmt: skip
+    assert driving.score == 40
+    assert driving.summary["distance_to_start"] < 0.01, "it never left home"
+    assert (
+        "In state square, the robot did not move; its moves are: rotate -90°, straight 1.25 m, "
+        "rotate +90°, straight 1.25 m, rotate +90°, straight 1.25 m."
+    ) in driving.reasons
+    assert (
+        "In state return, the robot had driven only 0.00 m since the mission began (the "
+        "mission drives 3.75 m before it), so there was nothing to come back from."
+    ) in driving.reasons
+    assert any(
+        reason.startswith("In state circle, the robot did not move") for reason in driving.reasons
+    )
+
+
+def test_a_square_turned_the_wrong_way_loses_the_square_but_not_the_circle(tmp_path, reference):
+    # Every turn of the square goes the other way: the first one faces the robot west, into the
+    # wall beside its start, where it stays pinned. It never drives the square, so its way back
+    # (it began 0.25 m from home after 0.52 m of driving) cannot be credited either; the circle
+    # after it is driven as well as ever.
+    wrong = changed(
+        reference,
+        "goal = (x, y, (theta + move.angle) % (2 * math.pi))",
+        "goal = (x, y, (theta - move.angle) % (2 * math.pi))",
+        tmp_path / "solution.py",
+    )
+    run_mission(wrong, out=tmp_path / "run", animation=False)
+    driving = score_bag(tmp_path / "run")
+    assert driving.parts["square"] <= 20 / 6
+    assert driving.parts == {
+        "bag": 5, "states": 20, "stops": 15, "square": 3.33, "return": 0, "circle": 20,
+    }  # fmt: skip
+    assert driving.reasons[0] == "In state square, turn 1 turned 0°; it should turn 90° clockwise."
+
+
+def test_a_mission_past_the_simulated_time_limit_is_scored_from_its_bag(tmp_path, reference):
+    # The node drives every state, then waits for ever instead of announcing "done".
+    endless = changed(reference, _DONE, "while True:\n        rospy.sleep(1.0)", tmp_path / "s.py")
+    with pytest.raises(MissionError, match="did not announce 'done' within 600 simulated s"):
+        run_mission(endless, out=tmp_path / "run", animation=False)
+    assert (tmp_path / "run" / "summary.json").is_file(), "the summary is written before it fails"
+    driving = score_bag(tmp_path / "run")
+    assert driving.parts == {
+        "bag": 5, "states": 0, "stops": 15, "square": 20, "return": 20, "circle": 20,
+    }  # fmt: skip
+    assert not driving.finished
+
+
+def test_a_mission_that_never_ends_is_scored_from_its_bag_in_the_sandbox(
+    sandbox, tmp_path, reference
+):
+    endless = changed(reference, _DONE, "while True:\n        rospy.sleep(1.0)", tmp_path / "s.py")
+    driving = drive(endless, tmp_path / "box", Limits(mission_seconds=120))
+    assert driving.reasons[:2] == [
+        "The mission could not run to its end: The mission did not announce 'done' within 600 "
+        "simulated seconds (last log: state circle (YELLOW)).",
+        "It is scored from the bag it wrote until then.",
+    ]
+    assert driving.score == 80, driving.reasons
+    assert not any("/" in reason or "log.txt" in reason for reason in driving.reasons)
+
+
+def test_a_mission_that_never_ends_is_stopped_by_the_wall_clock_and_scored(
+    sandbox, tmp_path, reference
+):
+    # A busy loop after the circle: the simulation cannot go on, only the wall clock ends it.
+    busy = changed(reference, _DONE, "while True:\n        pass", tmp_path / "s.py")
+    driving = drive(busy, tmp_path / "box", Limits(mission_seconds=20))
+    assert driving.reasons[:2] == [
+        "The mission did not end within 20 s of wall time.",
+        "It is scored from the bag it wrote until then.",
+    ]
+    assert driving.parts == {
+        "bag": 5, "states": 0, "stops": 15, "square": 20, "return": 20, "circle": 20,
+    }  # fmt: skip
+
+
+def test_a_busy_node_from_the_start_scores_zero_with_the_wall_clock_reason(sandbox, tmp_path):
     source = export_solution(ROOT / "solutions").source
     solution = tmp_path / "solution.py"
     solution.write_text(source + "\n\ndef mission_node(mission):\n    while True:\n        pass\n")
@@ -52,11 +199,22 @@ def test_a_mission_that_never_ends_is_stopped_by_the_wall_clock(sandbox, tmp_pat
     assert driving.reasons == ["The mission did not end within 15 s of wall time."]
 
 
-def test_wrong_colours_lose_the_states_and_stops_but_keep_the_bag_and_closure(tmp_path):
+def test_an_unfinished_course_scores_zero_with_the_students_reason(sandbox, tmp_path):
+    driving = drive(ROOT / "course", tmp_path / "box", Limits())
+    assert driving.score == 0
+    (reason,) = driving.reasons
+    assert reason.startswith("The mission could not run to its end: Finish notebook")
+    assert "log.txt" not in reason
+    assert "/" not in reason
+
+
+def test_wrong_colours_lose_the_states_and_stops_but_keep_the_driving(tmp_path):
     run_mission(out=tmp_path / "run", stop_color="GREEN", animation=False)
     driving = score_bag(tmp_path / "run")
-    assert driving.parts == {"bag": 10.0, "states": 0.0, "stops": 0.0, "closure": 25.0}
-    assert driving.score == 35
+    assert driving.parts == {
+        "bag": 5, "states": 0, "stops": 0, "square": 20, "return": 20, "circle": 20,
+    }  # fmt: skip
+    assert driving.score == 65
     assert driving.reasons[0] == ("State 1 should be wait in RED, but the bag shows wait in GREEN.")
 
 
@@ -66,3 +224,68 @@ def test_a_missing_or_broken_bag_scores_zero(tmp_path):
     broken = score_bag(tmp_path)
     assert broken.score == 0
     assert broken.reasons[0].startswith("The mission's bag cannot be read:")
+    assert str(tmp_path) not in broken.reasons[0]
+
+
+def test_the_moves_geometry_is_the_graders_not_the_librarys():
+    from duckielib import behaviour
+
+    assert not hasattr(behaviour, "_follow")
+    assert not hasattr(behaviour, "StateMotion")
+    assert "motion" not in behaviour.MissionReport.__dataclass_fields__
+
+
+def _plain(reason):
+    return "/" not in reason.replace("/ground_truth_pose", "")
+
+
+def test_a_run_folder_that_is_a_link_is_not_followed(tmp_path):
+    # The link points to a folder with a bag the grader would otherwise read (and reject as
+    # broken): the reason shows it never got that far.
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    (elsewhere / "mission.bag").write_bytes(b"#ROSBAG V2.0\n" + struct.pack("<i", 99) + b"junk")
+    (elsewhere / "trajectory.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+    (tmp_path / "run").symlink_to(elsewhere)
+    driving = score_bag(tmp_path / "run")
+    assert driving.score == 0
+    assert driving.reasons == [
+        "The mission's bag was not read: the run's folder is a symbolic link."
+    ]
+    assert driving.figure is None
+    assert all(_plain(reason) for reason in driving.reasons)
+
+
+@pytest.mark.timeout(30)
+def test_a_fifo_for_a_bag_is_refused_without_blocking(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    os.mkfifo(run / "mission.bag")
+    os.mkfifo(run / "trajectory.png")
+    driving = score_bag(run)
+    assert driving.score == 0
+    assert driving.reasons == ["The mission's bag was not read: it is a FIFO, not a file."]
+    assert driving.figure is None
+    # A run that stopped early, whose killed recording is a FIFO, is not read either.
+    (run / "mission.bag").unlink()
+    os.mkfifo(run / "mission.bag.active")
+    unfinished = _score_unfinished(run, "square_then_circle", "The mission stopped.")
+    assert unfinished.score == 0
+    assert unfinished.reasons == [
+        "The mission stopped.",
+        "The mission's recording was not read: it is a FIFO, not a file.",
+    ]
+
+
+def test_a_bag_over_the_bound_is_not_read(tmp_path):
+    run = tmp_path / "run"
+    run.mkdir()
+    size = 300 * 1024**2
+    assert size > BAG_LIMIT
+    subprocess.run(["truncate", "-s", str(size), str(run / "mission.bag")], check=True)
+    driving = score_bag(run)
+    assert driving.score == 0
+    assert driving.reasons == [
+        "The mission's bag was not read: it is 300.0 MB; at most 200.0 MB is read."
+    ]
+    assert all(_plain(reason) for reason in driving.reasons)

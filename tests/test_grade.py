@@ -186,7 +186,9 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
     assert json.loads((tmp_path / "out" / "skipped.json").read_text()) == []
     # Only 03_frames was handed in: the export lacks the mission's parts, so no driving score.
     assert rows["ada"]["driving_score"] == "0"
-    assert rows["ada"]["driving_problems"].startswith("The mission could not run:")
+    assert rows["ada"]["driving_problems"].startswith(
+        "The mission could not run to its end: Finish notebook"
+    )
     # Feedback: one page each, with the failed tests' messages and never a hidden test's code.
     pages = {name: (tmp_path / "out" / "feedback" / f"{name}.html").read_text() for name in rows}
     assert "CellTimeoutError" in pages["cy"]
@@ -325,9 +327,11 @@ def test_notebooks_linked_to_the_reference_are_neither_graded_nor_driven(sandbox
         tmp_path / "submissions", tmp_path / "out", names=[ASSIGNMENT], limits=Limits()
     )
     assert {path: path.read_bytes() for path in before} == before, "a link was written through"
+    # The links are never read: nothing of the reference is graded, exported or driven.
     assert result.total == 0
-    linked, raised = result.problems
-    assert linked == f"{ASSIGNMENT}: the notebook is a link; the release was graded"
-    assert raised.startswith(f"{ASSIGNMENT}: 5 cells outside the tests raised:")
+    assert result.problems == [
+        f"{ASSIGNMENT}: {ASSIGNMENT}.ipynb is a symbolic link; it was left out.",
+        f"{ASSIGNMENT}: no {ASSIGNMENT}.ipynb in the submission",
+    ]
     assert result.driving.score == 0
-    assert result.driving.reasons[0].startswith("The mission could not run: Finish notebook")
+    assert result.driving.reasons == ["No notebook was handed in: there was nothing to drive."]

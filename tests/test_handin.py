@@ -8,8 +8,8 @@ import zipfile
 import nbformat
 import pytest
 
-from autograder.course import ROOT
-from autograder.grade import find_submissions
+from autograder.course import ROOT, assignments
+from autograder.grade import find_submissions, read_submission
 from duckielib.cli import main
 from duckielib.handin import HandinError, check_course, handin, run_notebook
 
@@ -143,9 +143,11 @@ def test_duckie_handin_checks_each_notebook_and_zips_them_for_duckie_grade(tmp_p
     submissions = tmp_path / "submissions"
     submissions.mkdir()
     shutil.copy(tmp_path / "ada.zip", submissions)
-    found, skipped = find_submissions(submissions, tmp_path / "work")
+    found, skipped = find_submissions(submissions)
     assert skipped == []
-    assert sorted(path.name for path in found["ada"].iterdir()) == [
+    collected = read_submission(found["ada"], assignments(ROOT / "course"))
+    assert collected.left_out == []
+    assert sorted({name.split("/")[0] for name in collected.files}) == [
         "01_getting_started",
         "03_frames",
         "04_kinematics",

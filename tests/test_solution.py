@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import linecache
 import math
+import os
 import subprocess
 import sys
 
@@ -108,6 +109,14 @@ def test_export_keeps_definitions_and_drops_exploration(tmp_path):
     assert "Finish notebook 03_frames: define wrap_angle, rotation_matrix," in report
     assert not export.complete
     compile(export.source, "solution.py", "exec")
+
+
+@pytest.mark.timeout(30)
+def test_a_fifo_named_like_a_notebook_is_passed_over_not_waited_on(tmp_path):
+    folder = odometry_course(tmp_path / "course")
+    os.mkfifo(folder / "05_odometry" / "zz_scratch.ipynb")
+    export = export_solution(folder)
+    assert export.notebooks == ["05_odometry/05_odometry.ipynb"]
 
 
 def test_unwritten_functions_and_classes_are_reported(tmp_path):

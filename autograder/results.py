@@ -1,0 +1,121 @@
+"""What grading one student gives, and how it is kept: as plain data, written whole or not at all.
+
+A student's result travels from the process that graded them (perhaps on another machine of
+a cluster) to the one writer of the class's results as JSON (:func:`to_data`,
+:func:`from_data`), and is kept in ``results/STUDENT.json`` as soon as it arrives, written
+atomically (:func:`write_atomic`): a crash or Ctrl-C never leaves half a file, and the next
+``duckie grade`` reads it back instead of grading that student again.
+"""
+
+from __future__ import annotations
+
+import base64
+import dataclasses
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Tuple, Union
+
+from autograder.driving import Driving
+
+__all__ = ["StudentResult", "from_data", "to_data", "write_atomic"]
+
+
+@dataclass
+class StudentResult:
+    """What grading one student gave.
+
+    Attributes:
+        student: the student's id (their folder's name).
+        cells: ``(assignment, grade_id) -> (score, max_score)``.
+        problems: one sentence each: what went wrong while grading (not failed tests).
+        messages: ``(assignment, grade_id) -> message`` of each failed test.
+        driving: the driving score, or None when the mission was not driven.
+        seconds: wall-clock seconds spent on this student.
+        complete: False when the grading itself stopped (a crash, the grader's time limit):
+            the next ``duckie grade`` grades this student again.
+        timings: where the unit's time went, in seconds: ``notebooks`` (the sandboxed runs,
+            kernels' starts included), ``cells`` (the cells themselves), ``nbgrader`` (its
+            converters and gradebook), ``driving`` (export and mission), ``unit`` (all).
+    """
+
+    student: str
+    cells: Dict[Tuple[str, str], Tuple[float, float]] = field(default_factory=dict)
+    problems: List[str] = field(default_factory=list)
+    messages: Dict[Tuple[str, str], str] = field(default_factory=dict)
+    driving: Optional[Driving] = None
+    seconds: float = 0.0
+    complete: bool = True
+    timings: Dict[str, float] = field(default_factory=dict)
+
+    @property
+    def total(self) -> float:
+        """The points scored, all assignments together."""
+        return sum(score for score, _ in self.cells.values())
+
+    @property
+    def max_total(self) -> float:
+        """The points there were to score."""
+        return sum(most for _, most in self.cells.values())
+
+
+def _key(pair: Tuple[str, str]) -> str:
+    return f"{pair[0]}:{pair[1]}"
+
+
+def _pair(key: str) -> Tuple[str, str]:
+    assignment, _, grade_id = key.partition(":")
+    return assignment, grade_id
+
+
+def to_data(result: StudentResult) -> Dict[str, Any]:
+    """``result`` as JSON-ready data."""
+    driving = None
+    if result.driving is not None:
+        driving = dataclasses.asdict(result.driving)
+        figure = driving.get("figure")
+        driving["figure"] = None if figure is None else base64.b64encode(figure).decode("ascii")
+    return {
+        "student": result.student,
+        "cells": {_key(key): list(value) for key, value in result.cells.items()},
+        "problems": list(result.problems),
+        "messages": {_key(key): value for key, value in result.messages.items()},
+        "driving": driving,
+        "seconds": result.seconds,
+        "complete": result.complete,
+        "timings": dict(result.timings),
+    }
+
+
+def from_data(data: Dict[str, Any]) -> StudentResult:
+    """The result that :func:`to_data` gave ``data`` for."""
+    driving = data.get("driving")
+    if driving is not None:
+        known = {item.name for item in dataclasses.fields(Driving)}
+        driving = {name: value for name, value in driving.items() if name in known}
+        if driving.get("figure") is not None:
+            driving["figure"] = base64.b64decode(driving["figure"])
+        driving = Driving(**driving)
+    return StudentResult(
+        student=str(data["student"]),
+        cells={_pair(key): (float(v[0]), float(v[1])) for key, v in data["cells"].items()},
+        problems=[str(problem) for problem in data.get("problems", [])],
+        messages={_pair(key): str(value) for key, value in data.get("messages", {}).items()},
+        driving=driving,
+        seconds=float(data.get("seconds", 0.0)),
+        complete=bool(data.get("complete", True)),
+        timings={str(key): float(value) for key, value in data.get("timings", {}).items()},
+    )
+
+
+def write_atomic(path: Union[str, Path], data: Union[str, bytes]) -> None:
+    """Write ``path`` whole or not at all: a temporary file beside it, then renamed over it."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    raw = data.encode("utf-8") if isinstance(data, str) else data
+    with tempfile.NamedTemporaryFile(dir=path.parent, delete=False, suffix=".tmp") as handle:
+        handle.write(raw)
+        handle.flush()
+        os.fsync(handle.fileno())
+    Path(handle.name).replace(path)

@@ -1,0 +1,440 @@
+"""Grading one student: the unit of a class's grading, in a process of its own.
+
+Whatever one student's files do to the grader (a notebook nbgrader cannot handle, a hang, a
+crash, all memory), it happens in this unit's process and stops there: the class's other
+students, and the results already written, are not touched. A unit runs on any worker of the
+class's Dask cluster (:mod:`autograder.grade`): :func:`run_unit` writes what it is given into a
+temporary folder, starts ``python -m autograder.unit FOLDER`` with a time limit, and answers
+with what that process wrote back, as plain data.
+
+Inside, nbgrader works as it does for a class, on a gradebook of this unit's own (a copy of the
+class's, which holds the hidden tests): the student's notebooks are repaired against the release
+(:mod:`autograder.tamper`), autograded with their cells run in the sandbox
+(:mod:`autograder.sandbox`, :mod:`autograder.execute`), and exported to drive the mission
+(:mod:`autograder.driving`). The grader reads back only what it asked for: the executed notebook
+a sandboxed run prints (bounded), and the mission's files through :mod:`autograder.files`. The
+notebooks it exports are its own repaired copies, in a folder no sandbox sees.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Tuple
+
+__all__ = ["UNIT_MARGIN_S", "raised_outside_tests", "run_unit", "unit_seconds"]
+
+#: Seconds a unit may take besides its notebooks' and mission's limits (nbgrader's own work).
+UNIT_MARGIN_S = 300
+#: What of a student's files the notebook's folder gets: not notebooks (the repaired one is
+#: written there), not hidden files, not Python modules (a ``numpy.py`` next to the notebook
+#: would stand in for numpy in the tests).
+SKIPPED = ("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
+
+_EXECUTE = Path(__file__).resolve().parent / "execute.py"
+
+
+def unit_seconds(task: Dict[str, Any]) -> float:
+    """The wall time a student's unit may take: each notebook's limit, the mission's, a margin."""
+    limits = task["limits"]
+    driving = limits["mission_seconds"] if task.get("driving") else 0
+    return len(task["names"]) * limits["submission_seconds"] + driving + UNIT_MARGIN_S
+
+
+def _pdeathsig() -> None:  # pragma: no cover - runs in the child before exec
+    """Die with the worker that started this unit (Linux), so none outlives a killed worker."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+def run_unit(task: Dict[str, Any], files: Dict[str, bytes], course: Path) -> Dict[str, Any]:
+    """Grade one student in a process of its own; what it found, as plain data.
+
+    Args:
+        task: the student, the assignments, the limits (see :mod:`autograder.grade`).
+        files: the student's files, ``"NAME/relative/path" -> bytes``, already read safely.
+        course: a folder with the class's ``source/``, ``release/`` and ``gradebook.db``.
+
+    Returns:
+        ``{"result": ..., "autograded": {NAME: notebook text}}``, the result as
+        :func:`autograder.results.to_data` writes it; when the unit itself stopped (its time
+        limit, a crash), a result with ``complete`` false and a sentence saying why.
+    """
+    from autograder.files import write_files
+
+    seconds = unit_seconds(task)
+    with tempfile.TemporaryDirectory(prefix="duckie-unit-") as folder:
+        base = Path(folder)
+        write_files(base / "submission", files)
+        (base / "task.json").write_text(
+            json.dumps({**task, "course_dir": str(course)}), encoding="utf-8"
+        )
+        command = [sys.executable, "-m", "autograder.unit", str(base)]
+        stopped = None
+        try:
+            finished = subprocess.run(
+                command,
+                capture_output=True,
+                text=True,
+                timeout=seconds,
+                check=False,
+                preexec_fn=_pdeathsig,
+            )
+            if finished.returncode != 0 or not (base / "result.json").is_file():
+                lines = [line for line in finished.stderr.splitlines() if line.strip()]
+                stopped = (
+                    f"the grader's process for this student stopped ({lines[-1][:300]})"
+                    if lines
+                    else f"the grader's process for this student ended with {finished.returncode}"
+                )
+        except subprocess.TimeoutExpired:
+            stopped = f"the grading of this student took more than {seconds:.0f} s and was stopped"
+        if stopped is not None:
+            return {
+                "result": {
+                    "student": task["student"],
+                    "cells": {},
+                    "problems": [f"Grading stopped: {stopped}; run duckie grade again to retry."],
+                    "messages": {},
+                    "driving": None,
+                    "complete": False,
+                },
+                "autograded": {},
+            }
+        answer = json.loads((base / "result.json").read_text(encoding="utf-8"))
+        autograded = {}
+        for name in task["names"]:
+            path = base / "autograded" / f"{name}.ipynb"
+            if path.is_file():
+                autograded[name] = path.read_text(encoding="utf-8")
+        return {"result": answer, "autograded": autograded}
+
+
+# What follows runs in the unit's own process.
+
+
+def _sandboxed_execute_class(unit: _Unit):
+    """The class that takes the place of nbgrader's Execute: the notebook runs in the sandbox."""
+    import nbformat
+    from nbgrader.preprocessors import Execute
+
+    from autograder import sandbox
+    from autograder.execute import METADATA_KEY, mark_not_run
+
+    class SandboxedExecute(Execute):
+        def preprocess(self, nb, resources):
+            name = resources["nbgrader"]["assignment"]
+            limits = unit.limits
+            command = [sys.executable, str(_EXECUTE), str(limits.cell_seconds)]
+            began = time.monotonic()
+            try:
+                result = sandbox.run(
+                    command,
+                    unit.sandboxes / name,
+                    limits,
+                    limits.submission_seconds,
+                    use_sandbox=unit.use_sandbox,
+                    stdin=nbformat.writes(nb),
+                    course=unit.sandboxes,
+                )
+                executed = None
+                if result.stdout.strip():
+                    try:
+                        executed = nbformat.reads(result.stdout, as_version=4)
+                    except Exception:  # cut or damaged: the notebook's run is not trusted
+                        problem = "answered with something that is not a notebook"
+                else:
+                    problem = result.stderr.strip()[-500:] or "stopped with no output"
+            except subprocess.TimeoutExpired:
+                executed = None
+                problem = (
+                    f"ran out of its {limits.submission_seconds} s (all cells and the "
+                    "kernel's start); the cells after that never ran"
+                )
+            unit.timings["notebooks"] += time.monotonic() - began
+            if executed is None:
+                mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
+                unit.problems.append(f"{name}: the notebook {problem}.")
+                return nb, resources
+            unit.timings["cells"] += _cell_seconds(executed)
+            found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
+            unit.problems.extend(f"{name}: {problem}" for problem in found)
+            unit.problems.extend(_cells_that_stopped(name, nb, executed, limits.cell_seconds))
+            return executed, resources
+
+    return SandboxedExecute
+
+
+def raised_outside_tests(
+    assignment: str, sent: Any, executed: Any, cell_seconds: Optional[int] = None
+) -> Optional[str]:
+    """One sentence naming every cell outside the test cells that raised, or None if none did.
+
+    Which cells are tests, where each cell is and what it says come from ``sent``: the notebook
+    this process handed to the run, rebuilt on the release's instructor cells
+    (:func:`autograder.tamper.repair`, then nbgrader's own restoring from the gradebook), so a
+    student cannot turn a cell into a test or out of one. Only the error outputs are read from
+    ``executed``, what came back from the run, and only as text. Cells that never ran because
+    the kernel died (the ``NotRun`` error of :func:`autograder.execute.mark_not_run`) are left
+    out: the kernel's death is a problem of its own.
+
+    Args:
+        assignment: the assignment's name, which starts the sentence.
+        sent: the notebook as sent to be run.
+        executed: the same notebook as it came back, with its outputs.
+        cell_seconds: the time limit of a cell, quoted for a cell that ran out of it.
+    """
+    from autograder.execute import NOT_RUN
+    from duckielib.handin import raised_cells
+
+    raised = [
+        cell
+        for cell in raised_cells(sent.cells, executed.cells, cell_seconds, skip=(NOT_RUN,))
+        if not sent.cells[cell.number - 1].get("metadata", {}).get("nbgrader", {}).get("grade")
+    ]
+    if not raised:
+        return None
+    cells = "1 cell" if len(raised) == 1 else f"{len(raised)} cells"
+    found = "; ".join(cell.describe() for cell in raised)
+    return f"{assignment}: {cells} outside the tests raised: {found}"
+
+
+def _cells_that_stopped(name: str, sent: Any, executed: Any, cell_seconds: int) -> List[str]:
+    """Sentences for the cells outside the tests that raised, and the tests that ran out of time."""
+    from duckielib.handin import raised_cells
+
+    said = []
+    raised = raised_outside_tests(name, sent, executed, cell_seconds)
+    if raised is not None:
+        said.append(raised)
+    tests = {
+        index
+        for index, cell in enumerate(sent.cells)
+        if cell.get("metadata", {}).get("nbgrader", {}).get("grade")
+    }
+    late = [
+        cell
+        for cell in raised_cells(sent.cells, executed.cells, cell_seconds)
+        if cell.number - 1 in tests
+        and cell.error.startswith(("CellTimeoutError", "KeyboardInterrupt"))
+    ]
+    if late:
+        names = ", ".join(cell.grade_id or f"cell {cell.number}" for cell in late)
+        said.append(
+            f"{name}: {names} ran out of the {cell_seconds} s a cell may take and scored zero."
+        )
+    return said
+
+
+@dataclasses.dataclass
+class _Unit:
+    """One student's grading, inside the unit's process."""
+
+    folder: Path
+    task: Dict[str, Any]
+    problems: List[str] = dataclasses.field(default_factory=list)
+    timings: Dict[str, float] = dataclasses.field(
+        default_factory=lambda: dict.fromkeys(("notebooks", "cells", "nbgrader", "driving"), 0.0)
+    )
+
+    def __post_init__(self) -> None:
+        from autograder.sandbox import Limits, unit_user
+
+        self.student: str = self.task["student"]
+        self.names: List[str] = list(self.task["names"])
+        self.course: List[str] = list(self.task["course"])
+        # A user of its own: the process limit then counts this student's processes only.
+        self.limits = dataclasses.replace(Limits(**self.task["limits"]), uid=unit_user())
+        self.use_sandbox = bool(self.task["use_sandbox"])
+        self.course_dir = Path(self.task["course_dir"])
+        self.root = self.folder / "nbgrader"
+        self.sandboxes = self.folder / "sandboxes"
+        self.export = self.folder / "export"
+
+    def hand_in(self, name: str, aside: List[str]) -> bool:
+        """Repair one notebook and lay it out for nbgrader, the sandbox and the export."""
+        import nbformat
+
+        from autograder.tamper import repair
+
+        said = self.problems if name in self.names else aside
+        submitted = self.folder / "submission" / name
+        handed_in = submitted / f"{name}.ipynb"
+        if not handed_in.is_file():
+            said.append(f"{name}: no {name}.ipynb in the submission")
+            return False
+        release = self.course_dir / "release" / name / f"{name}.ipynb"
+        notebook, found = repair(handed_in, release)
+        said.extend(found)
+        target = self.root / "submitted" / self.student / name
+        shutil.copytree(submitted, target)
+        nbformat.write(notebook, target / f"{name}.ipynb")
+        box = self.sandboxes / name
+        shutil.copytree(submitted, box, ignore=shutil.ignore_patterns(*SKIPPED))
+        nbformat.write(notebook, box / f"{name}.ipynb")
+        for path in [self.sandboxes, box, *box.rglob("*")]:
+            os.chown(path, self.limits.uid, self.limits.uid, follow_symlinks=False)
+        (self.export / name).mkdir()
+        nbformat.write(notebook, self.export / name / f"{name}.ipynb")
+        return True
+
+    def grade(self) -> Dict[str, Any]:
+        from autograder.course import _api, nbgrader_config
+
+        began = time.monotonic()
+        self.root.mkdir()
+        self.sandboxes.mkdir()
+        self.export.mkdir()
+        shutil.copy(self.course_dir / "gradebook.db", self.root / "gradebook.db")
+        config = nbgrader_config(
+            root=self.root,
+            release=self.course_dir / "release",
+            db=self.root / "gradebook.db",
+            source=self.course_dir / "source",
+        )
+        config.CourseDirectory.submitted_directory = "submitted"
+        config.CourseDirectory.autograded_directory = "autograded"
+        config.Autograde.autograde_preprocessors = [
+            _sandboxed_execute_class(self) if getattr(pp, "__name__", "") == "Execute" else pp
+            for pp in _default_autograde_preprocessors()
+        ]
+        api = _api(config)
+        aside: List[str] = []
+        handed_in = [name for name in self.course if self.hand_in(name, aside)]
+        messages: Dict[Tuple[str, str], str] = {}
+        from autograder.feedback import failure_messages
+
+        for name in [name for name in handed_in if name in self.names]:
+            before = time.monotonic() - self.timings["notebooks"]
+            outcome = api.autograde(name, self.student, force=True, create=True)
+            self.timings["nbgrader"] += time.monotonic() - self.timings["notebooks"] - before
+            if not outcome["success"]:
+                self.problems.append(f"{name}: nbgrader could not grade it ({_why(outcome)})")
+            graded = self.root / "autograded" / self.student / name / f"{name}.ipynb"
+            if graded.is_file():
+                (self.folder / "autograded").mkdir(exist_ok=True)
+                shutil.copy(graded, self.folder / "autograded" / f"{name}.ipynb")
+            for grade_id, message in failure_messages(graded).items():
+                messages[(name, grade_id)] = message
+        cells = _scores(config, self.student, self.names)
+        driving = None
+        if self.task.get("driving"):
+            from autograder.driving import Driving, drive
+
+            before = time.monotonic()
+            if handed_in:
+                driving = drive(self.export, self.folder / "driving", self.limits, self.use_sandbox)
+                # The grader's folders mean nothing to the student.
+                driving.reasons = [_without(reason, self.folder) for reason in driving.reasons]
+                if driving.timed_out:  # the instructor should know: the limit may be too tight
+                    self.problems.append(
+                        f"Driving: the mission did not end within {self.limits.mission_seconds} s "
+                        "of wall time."
+                    )
+            else:
+                driving = Driving(
+                    reasons=["No notebook was handed in: there was nothing to drive."]
+                )
+            if driving is not None:
+                self.timings["driving"] = time.monotonic() - before
+        from autograder.results import StudentResult, to_data
+
+        self.timings["unit"] = time.monotonic() - began
+
+        return to_data(
+            StudentResult(
+                self.student, cells=cells, problems=self.problems, messages=messages,
+                driving=driving, timings=self.timings,
+            )
+        )  # fmt: skip
+
+
+def _cell_seconds(notebook: Any) -> float:
+    """How long a run notebook's cells took, by the times its kernel recorded."""
+    from datetime import datetime
+
+    total = 0.0
+    for cell in notebook.cells:
+        times = cell.get("metadata", {}).get("execution", {})
+        try:
+            start = datetime.fromisoformat(times["iopub.execute_input"].replace("Z", "+00:00"))
+            end = datetime.fromisoformat(times["shell.execute_reply"].replace("Z", "+00:00"))
+        except (KeyError, TypeError, ValueError, AttributeError):
+            continue
+        total += max(0.0, (end - start).total_seconds())
+    return total
+
+
+def _without(text: str, folder: Path) -> str:
+    """``text`` with the paths below ``folder`` (the unit's own) said as the student knows them."""
+    text = text.replace(f"{folder}/export", "your notebooks' folder")
+    return text.replace(str(folder), "the grader's folder")
+
+
+def _default_autograde_preprocessors() -> list:
+    from nbgrader.converters import Autograde
+
+    return list(Autograde.class_traits()["autograde_preprocessors"].default())
+
+
+def _why(outcome: Dict[str, object]) -> str:
+    from autograder.course import _log_tail
+
+    lines = [line for line in _log_tail(outcome).splitlines() if line.strip()]
+    return lines[-1][:300] if lines else "no log"
+
+
+def _scores(
+    config: Any, student: str, names: List[str]
+) -> Dict[Tuple[str, str], Tuple[float, float]]:
+    """The student's scores from the unit's gradebook; a test never graded scores 0."""
+    from nbgrader.api import Gradebook, MissingEntry
+
+    cells: Dict[Tuple[str, str], Tuple[float, float]] = {}
+    with Gradebook(config.CourseDirectory.db_url) as gradebook:
+        for name in names:
+            for notebook in gradebook.find_assignment(name).notebooks:
+                for cell in notebook.grade_cells:
+                    cells[(name, cell.name)] = (0.0, float(cell.max_score))
+            try:
+                submission = gradebook.find_submission(name, student)
+            except MissingEntry:
+                continue
+            for notebook in submission.notebooks:
+                for grade in notebook.grades:
+                    cells[(name, grade.name)] = (float(grade.score), float(grade.max_score))
+    return cells
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    """``python -m autograder.unit FOLDER``: grade the student of ``FOLDER/task.json``."""
+    import warnings
+
+    warnings.filterwarnings("ignore")  # nbgrader's gradebook warns about its session
+    folder = Path((argv or sys.argv[1:])[0])
+    task = json.loads((folder / "task.json").read_text(encoding="utf-8"))
+    try:
+        data = _Unit(folder, task).grade()
+    except Exception as error:  # any failure of the grader's on this student: said, not spread
+        lines = traceback.format_exception_only(type(error), error)
+        print(lines[-1].strip(), file=sys.stderr)
+        return 1
+    from autograder.results import write_atomic
+
+    write_atomic(folder / "result.json", json.dumps(data))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,186 @@
+"""A class with students who attack the grader itself, graded with the driving score.
+
+Each student hands in the whole course. What each does, and what an instructor wants:
+
+- ``reference``: the reference answers: every point, a driving score of 100, no problem, as
+  when graded alone.
+- ``link_farm``: the untouched release, plus a cell in notebook 11 that links the reference
+  solutions into its working folder, where the grader once exported from: nothing of them is
+  read, so no test point and no driving point.
+- ``fifo``: a FIFO named like a notebook in the submission, and one made by a cell: the run
+  never blocks, the FIFO is left out and said.
+- ``sparse``: a sparse 100 GB file named like a notebook: left out and said; the student
+  keeps every point.
+- ``never_drives``: a mission node that announces every state and colour but never moves:
+  the driving points for the moves are lost.
+- ``hangs_on_import``: an exported constant whose value takes for ever: the driving run is
+  stopped by its wall clock, said in ``problems``; the tests keep their points.
+- ``prints_20mb``: a cell that prints 20 MB: the stored notebook keeps 2 MB, said.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import nbformat
+import pytest
+
+from autograder.bench import filled_course
+from autograder.course import ROOT
+from autograder.grade import grade_class
+from autograder.sandbox import Limits, check_sandbox
+
+pytestmark = [pytest.mark.slow, pytest.mark.timeout(900)]
+
+GRADED = ["03_frames", "11_to_the_robot"]
+
+NEVER_DRIVES = """\
+def mission_node(mission):
+    rospy.init_node("mission_node")
+    announce = rospy.Publisher("~state", String, queue_size=10, latch=True)
+    shutdown = rospy.Publisher("shutdown", Empty, queue_size=1)
+    rospy.wait_for_service("light_service_node/set_color", timeout=10.0)
+    set_color = rospy.ServiceProxy("light_service_node/set_color", ChangePattern)
+    for state in mission.states:
+        set_color(String(data=state.color))
+        announce.publish(String(data=state.name))
+        for move in state.moves:
+            rospy.sleep(move.seconds if isinstance(move, Stop) else 2.0)
+    announce.publish(String(data="done"))
+    shutdown.publish(Empty())
+"""
+
+LINK_FARM = """\
+import os
+for name in ("05_odometry", "06_driving", "07_control", "08_leds", "09_mission"):
+    os.symlink(f"{solutions}/{{name}}/{{name}}.ipynb", f"zz_{{name}}.ipynb")
+print(sorted(os.listdir(".")))
+"""
+
+
+def _append(folder, name, source, export=False):
+    """Add a code cell at the end of the student's notebook ``name``."""
+    path = folder / name / f"{name}.ipynb"
+    notebook = nbformat.read(path, as_version=4)
+    cell = nbformat.v4.new_code_cell(source)
+    if export:
+        cell.metadata["tags"] = ["export"]
+    notebook.cells.append(cell)
+    nbformat.write(notebook, path)
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    if shutil.which("bwrap") is None:
+        pytest.skip("bubblewrap is not installed; run `make ros`.")
+    check_sandbox()
+    root = tmp_path_factory.mktemp("class")
+    submissions, out = root / "submissions", root / "out"
+    filled = filled_course(root / "filled")
+    for student in (
+        "reference",
+        "fifo",
+        "sparse",
+        "never_drives",
+        "hangs_on_import",
+        "prints_20mb",
+    ):
+        shutil.copytree(filled, submissions / student)
+    shutil.copytree(ROOT / "course", submissions / "link_farm")
+    _append(
+        submissions / "link_farm",
+        "11_to_the_robot",
+        LINK_FARM.format(solutions=ROOT / "solutions"),
+    )
+    os.mkfifo(submissions / "fifo" / "03_frames" / "zz_pipe.ipynb")
+    _append(submissions / "fifo", "03_frames", "import os\n\nos.mkfifo('zz_scratch.ipynb')\n")
+    with (submissions / "sparse" / "03_frames" / "zz_big.ipynb").open("wb") as handle:
+        handle.truncate(100 * 1024**3)
+    _append(submissions / "never_drives", "09_mission", NEVER_DRIVES, export=True)
+    _append(
+        submissions / "hangs_on_import",
+        "05_odometry",
+        "SETTLING_TIME = __import__('time').sleep(10**6)\n",
+        export=True,
+    )
+    _append(submissions / "prints_20mb", "03_frames", "print('x' * 20_000_000)\n")
+    results = grade_class(
+        submissions,
+        out,
+        jobs=2,
+        names=GRADED,
+        limits=Limits(cell_seconds=30, submission_seconds=300, mission_seconds=40),
+    )
+    return {result.student: result for result in results}, out
+
+
+def _lost(result):
+    return sorted(grade_id for (_, grade_id), (score, most) in result.cells.items() if score < most)
+
+
+def test_the_reference_student_is_graded_as_if_alone(graded):
+    results, _ = graded
+    reference = results["reference"]
+    assert reference.problems == []
+    assert reference.total == reference.max_total > 0
+    assert reference.driving.score == 100, reference.driving.reasons
+    assert len(results) == 7
+
+
+def test_links_to_the_solutions_made_during_the_run_are_never_read(graded):
+    results, _ = graded
+    farm = results["link_farm"]
+    assert farm.total == 0
+    assert farm.driving.score == 0
+    assert farm.driving.reasons[0].startswith("The mission could not run"), farm.driving.reasons
+    assert "Finish notebook" in farm.driving.reasons[0]
+
+
+def test_a_fifo_neither_hangs_the_grader_nor_costs_a_point(graded):
+    results, _ = graded
+    fifo = results["fifo"]
+    assert _lost(fifo) == []
+    assert fifo.driving.score == 100
+    assert fifo.problems == ["03_frames: zz_pipe.ipynb is a FIFO; it was left out."]
+
+
+def test_a_sparse_file_is_left_out_and_said(graded):
+    results, _ = graded
+    sparse = results["sparse"]
+    assert _lost(sparse) == []
+    assert sparse.problems == [
+        "03_frames: zz_big.ipynb is 102400.0 MB; at most 50.0 MB is read. It was left out."
+    ]
+
+
+def test_a_robot_that_never_drives_keeps_its_tests_but_loses_the_moves(graded):
+    results, _ = graded
+    idle = results["never_drives"]
+    assert _lost(idle) == []
+    assert idle.driving.score == 40, idle.driving.parts
+    assert any("did not move" in reason for reason in idle.driving.reasons)
+
+
+def test_code_that_hangs_on_import_is_stopped_and_reported(graded):
+    results, _ = graded
+    stuck = results["hangs_on_import"]
+    assert _lost(stuck) == []
+    assert stuck.driving.score == 0
+    assert stuck.driving.reasons == ["The mission did not end within 40 s of wall time."]
+    # Notebook 11 loads the student's solution too: its cells that import it run out of time.
+    timeouts, driving = stuck.problems
+    assert timeouts.startswith("11_to_the_robot: 5 cells outside the tests raised: cell 4 (mine")
+    assert "CellTimeoutError: still running after the 30 s a cell may take" in timeouts
+    assert driving == "Driving: the mission did not end within 40 s of wall time."
+
+
+def test_a_huge_print_is_cut_in_the_stored_notebook_and_said(graded):
+    results, out = graded
+    loud = results["prints_20mb"]
+    assert _lost(loud) == []
+    (problem,) = loud.problems
+    assert problem.startswith("03_frames: cell ")
+    assert problem.endswith(" showed 20.0 MB of output; the stored notebook keeps the first 2.0 MB")
+    stored = out / "work" / "autograded" / "prints_20mb" / "03_frames" / "03_frames.ipynb"
+    assert stored.stat().st_size < 3_000_000

@@ -1,0 +1,83 @@
+"""Reading a student's folder without trusting it: links, FIFOs, sparse files, unsafe zips."""
+
+from __future__ import annotations
+
+import os
+import stat
+import zipfile
+
+import pytest
+
+from autograder.files import UnsafeFile, collect_folder, read_regular, unpack_zip
+
+pytestmark = pytest.mark.timeout(30)  # a FIFO opened for reading would block for ever
+
+
+def test_a_regular_file_is_read_and_everything_else_is_refused_in_a_sentence(tmp_path):
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "mission.bag").write_bytes(b"#ROSBAG V2.0\n")
+    assert read_regular(tmp_path, "run/mission.bag") == b"#ROSBAG V2.0\n"
+    secret = tmp_path / "secret.txt"
+    secret.write_text("the reference solution")
+    (tmp_path / "run" / "link.bag").symlink_to(secret)
+    (tmp_path / "elsewhere").symlink_to(tmp_path / "run")
+    os.mkfifo(tmp_path / "run" / "fifo.bag")
+    with (tmp_path / "run" / "sparse.bag").open("wb") as handle:
+        handle.truncate(100 * 1024**3)  # 100 GB of nothing, on no disk
+    for relative, words in (
+        ("run/link.bag", "run/link.bag is a symbolic link."),
+        ("elsewhere/mission.bag", "elsewhere/mission.bag: elsewhere is not a folder."),
+        ("run/fifo.bag", "run/fifo.bag is a FIFO, not a file."),
+        ("run/sparse.bag", "run/sparse.bag is 102400.0 MB; at most 50.0 MB is read."),
+        ("run/none.bag", "run/none.bag does not exist."),
+        ("../secret.txt", "../secret.txt is not a path inside the folder."),
+    ):
+        with pytest.raises(UnsafeFile) as raised:
+            read_regular(tmp_path, relative)
+        assert str(raised.value) == words
+
+
+def test_a_students_folder_gives_its_files_and_says_what_it_left_out(tmp_path):
+    folder = tmp_path / "03_frames"
+    (folder / "data").mkdir(parents=True)
+    (folder / "03_frames.ipynb").write_text("{}")
+    (folder / "data" / "ticks.csv").write_text("1,2\n")
+    (folder / ".ipynb_checkpoints").mkdir()
+    (folder / ".ipynb_checkpoints" / "03_frames-checkpoint.ipynb").write_text("{}")
+    (folder / "zz_05_odometry.ipynb").symlink_to("/etc/passwd")
+    os.mkfifo(folder / "zz_scratch.ipynb")
+    with (folder / "zz_big.ipynb").open("wb") as handle:
+        handle.truncate(100 * 1024**3)
+    (folder / "half.bin").write_bytes(b"x" * 1000)
+    collected = collect_folder(folder, skip=(".*",), file_limit=1000, folder_limit=1000)
+    assert collected.files == {"03_frames.ipynb": b"{}", "data/ticks.csv": b"1,2\n"}
+    assert collected.left_out == [
+        "half.bin was left out: the folder's files passed 1000 bytes.",
+        "zz_05_odometry.ipynb is a symbolic link; it was left out.",
+        "zz_big.ipynb is 102400.0 MB; at most 1000 bytes is read. It was left out.",
+        "zz_scratch.ipynb is a FIFO; it was left out.",
+    ]
+
+
+def test_a_zip_is_read_in_memory_and_refused_when_it_points_outside(tmp_path):
+    good = tmp_path / "ada.zip"
+    with zipfile.ZipFile(good, "w") as archive:
+        archive.writestr("03_frames/03_frames.ipynb", "{}")
+        link = zipfile.ZipInfo("03_frames/zz_link.ipynb")
+        link.external_attr = (stat.S_IFLNK | 0o777) << 16
+        archive.writestr(link, "/etc/passwd")
+        archive.writestr("03_frames/big.bin", "y" * 5000)
+    collected = unpack_zip(good, folder_limit=1000)
+    assert collected.files == {"03_frames/03_frames.ipynb": b"{}"}
+    assert collected.left_out == [
+        "03_frames/zz_link.ipynb is a symbolic link; it was left out.",
+        "03_frames/big.bin was left out: the archive's files passed 1000 bytes.",
+    ]
+    bad = tmp_path / "eve.zip"
+    with zipfile.ZipFile(bad, "w") as archive:
+        archive.writestr("../../gradebook.db", "overwritten")
+    with pytest.raises(UnsafeFile, match=r"it holds the unsafe path '\.\./\.\./gradebook\.db'"):
+        unpack_zip(bad)
+    (tmp_path / "junk.zip").write_bytes(b"not a zip")
+    with pytest.raises(UnsafeFile, match="it is not a readable zip"):
+        unpack_zip(tmp_path / "junk.zip")
