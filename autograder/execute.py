@@ -3,7 +3,10 @@
 The grader sends the notebook (instructor's cells restored, hidden tests included) on standard
 input and reads the executed notebook on standard output; the notebook never lies in the
 sandbox's folder, so the student's code cannot open the file to read the hidden tests.
-Usage (inside the sandbox): ``python execute.py CELL_SECONDS``.
+Usage (inside the sandbox): ``python execute.py CELL_SECONDS``; or, to run all of one
+student's notebooks in one sandbox, one after the other (each in a new kernel),
+``python execute.py --serve CELL_SECONDS [--sandboxed]``, with requests and answers as frames
+on standard input and output (:func:`serve`).
 
 A cell that never got to run (the kernel died before it: ``os._exit``, a crash, the memory
 limit) gets an error output, so nbgrader scores its tests as failed rather than passed.
@@ -747,25 +750,14 @@ def _is_ipykernel(command: Sequence[str]) -> bool:
     )
 
 
-def main() -> None:
-    """Read a notebook on stdin, run it, write it on stdout."""
-    # First, before this script reads the notebook or imports nbclient: see Zygote.
-    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
-    cell_seconds = int(sys.argv[1])
-    # nbformat validates with jsonschema, whose optional "iri" format checker builds a grammar
-    # at import (about 1.2 s, for a format no notebook uses): leave that package out.
-    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
-    import nbformat
+def _execute(notebook: Any, folder: str, cell_seconds: int, zygote: Optional[Zygote]) -> None:
+    """Run every cell of ``notebook`` in a new kernel working in ``folder``; note the problems.
+
+    The problems (a kernel that died, helpers the tests rely on that had been replaced, outputs
+    cut) go into the notebook's metadata under :data:`METADATA_KEY`.
+    """
     from nbclient.exceptions import DeadKernelError
 
-    notebook = nbformat.read(sys.stdin, as_version=4)
-    # The kernel inherits file descriptors 1 and 2: keep the student's os.write(1, ...) out of
-    # the notebook this script answers with.
-    answer = os.fdopen(os.dup(1), "w", encoding="utf-8")
-    quiet = os.open(os.devnull, os.O_WRONLY)
-    os.dup2(quiet, 1)
-    os.dup2(quiet, 2)
-    # The kernel is killed rather than asked to stop: the sandbox ends with this script.
     options = {"kernel_manager_class": _forking_manager_class(zygote)} if zygote else {}
     executor = _guarded_client_class()(
         notebook,
@@ -778,7 +770,7 @@ def main() -> None:
         extra_arguments=["--HistoryManager.hist_file=:memory:"],
         shutdown_kernel="immediate",
         on_cell_executed=_record_reply_error,
-        resources={"metadata": {"path": "."}},
+        resources={"metadata": {"path": folder}},
         **options,
     )
     executor.replaced = {}
@@ -805,7 +797,114 @@ def main() -> None:
         )
     problems += limit_outputs(notebook)
     notebook.metadata[METADATA_KEY] = {"problems": problems}
-    answer.write(nbformat.writes(notebook))
+
+
+def _private_streams() -> Tuple[Any, Any]:
+    """This script's own input and output; fds 0, 1 and 2 then point at the null device.
+
+    Kernels inherit file descriptors 0 to 2: the student's ``os.write(1, ...)`` must not reach
+    the grader, nor ``os.read(0, ...)`` the next request.
+    """
+    given = os.fdopen(os.dup(0), "rb")
+    answer = os.fdopen(os.dup(1), "wb")
+    quiet = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):
+        os.dup2(quiet, fd)
+    os.close(quiet)
+    return given, answer
+
+
+def read_frame(stream: Any) -> Optional[bytes]:
+    """One message of the serving protocol: an 8-byte big-endian length, then that many bytes.
+
+    Returns:
+        The message, or None at the end of the stream.
+    """
+    head = stream.read(8)
+    if len(head) < 8:
+        return None
+    size = int.from_bytes(head, "big")
+    data = stream.read(size)
+    return data if len(data) == size else None
+
+
+def frame(data: bytes) -> bytes:
+    """``data`` as one message of the serving protocol (see :func:`read_frame`)."""
+    return len(data).to_bytes(8, "big") + data
+
+
+def _kill_strays(keep: Sequence[int]) -> None:
+    """Kill every process of this user left in the sandbox but ``keep`` (between notebooks).
+
+    A notebook may start processes that outlive its kernel (``subprocess.Popen`` of a
+    server); the next notebook starts among none of them, as in a sandbox of its own.
+    """
+    me = os.getuid()
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit() or int(entry.name) in keep:
+            continue
+        try:
+            if entry.stat().st_uid == me:
+                os.kill(int(entry.name), signal.SIGKILL)
+        except (OSError, ValueError):
+            continue
+
+
+def serve(cell_seconds: int, sandboxed: bool) -> None:
+    """Run the notebooks the grader sends, one after the other, each in a new kernel.
+
+    Each request is a JSON message ``{"folder", "notebook"}`` (the folder relative to the
+    working one), each answer ``{"notebook"}`` with the executed notebook, or ``{"problem"}``.
+    One zygote serves every kernel, so the libraries are imported once for all the notebooks.
+
+    Args:
+        cell_seconds: the time limit of a cell.
+        sandboxed: whether this runs in a sandbox of its own (its own user and process
+            namespace): only then are processes a notebook left behind killed before the next.
+    """
+    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
+    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
+    import nbformat
+
+    given, answer = _private_streams()
+    keep = [1, os.getpid()] + ([zygote.pid] if zygote is not None else [])
+    while True:
+        request = read_frame(given)
+        if request is None:
+            break
+        try:
+            message = json.loads(request)
+            notebook = nbformat.reads(message["notebook"], as_version=4)
+            folder = str(Path(message["folder"]).absolute())
+            _execute(notebook, folder, cell_seconds, zygote)
+            reply = {"notebook": nbformat.writes(notebook)}
+        except Exception as error:  # the grader reports it for this notebook
+            reply = {"problem": f"could not be run: {type(error).__name__}: {error}"}
+        answer.write(frame(json.dumps(reply).encode("utf-8")))
+        answer.flush()
+        if sandboxed:
+            _kill_strays(keep)
+    if zygote is not None:
+        zygote.close()
+    os._exit(0)  # nothing left to clean up: the sandbox and all in it end with this process
+
+
+def main() -> None:
+    """Read a notebook on stdin, run it, write it on stdout (``--serve``: many, as frames)."""
+    # First, before this script reads the notebook or imports nbclient: see Zygote.
+    if sys.argv[1] == "--serve":
+        serve(int(sys.argv[2]), sandboxed="--sandboxed" in sys.argv[3:])
+    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
+    cell_seconds = int(sys.argv[1])
+    # nbformat validates with jsonschema, whose optional "iri" format checker builds a grammar
+    # at import (about 1.2 s, for a format no notebook uses): leave that package out.
+    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
+    import nbformat
+
+    notebook = nbformat.read(sys.stdin, as_version=4)
+    _, answer = _private_streams()
+    _execute(notebook, ".", cell_seconds, zygote)
+    answer.write(nbformat.writes(notebook).encode("utf-8"))
     answer.flush()
     if zygote is not None:
         zygote.close()

@@ -144,7 +144,8 @@ def sandboxed_command(
         course: the folder of the student's assignment folders (``NAME/NAME.ipynb``), shown
             read-only at ``/course`` with ``folder`` writable at ``/course/NAME`` (``NAME`` is
             ``folder``'s name), so a notebook can load the student's other notebooks from
-            ``..`` as it does in JupyterLab.
+            ``..`` as it does in JupyterLab. When it is ``folder`` itself, all of it is
+            writable at ``/course``, the working folder (to run every notebook in turn).
     """
     bwrap = shutil.which("bwrap")
     if bwrap is None:
@@ -185,7 +186,12 @@ def sandboxed_command(
         "--dev", "/dev",
         "--proc", "/proc",
     ]  # fmt: skip
-    inside = INSIDE if course is None else f"{COURSE}/{Path(folder).name}"
+    if course is None:
+        inside = INSIDE
+    elif Path(course) == Path(folder):  # all the student's folders, writable
+        inside, course = COURSE, None
+    else:
+        inside = f"{COURSE}/{Path(folder).name}"
     if course is not None:
         args += ["--ro-bind", str(course), COURSE]
     args += [

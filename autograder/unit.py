@@ -18,6 +18,7 @@ notebooks it exports are its own repaired copies, in a folder no sandbox sees.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import os
@@ -129,39 +130,19 @@ def _sandboxed_execute_class(unit: _Unit):
     import nbformat
     from nbgrader.preprocessors import Execute
 
-    from autograder import sandbox
     from autograder.execute import METADATA_KEY, mark_not_run
 
     class SandboxedExecute(Execute):
         def preprocess(self, nb, resources):
             name = resources["nbgrader"]["assignment"]
-            limits = unit.limits
-            command = [sys.executable, str(_EXECUTE), str(limits.cell_seconds)]
             began = time.monotonic()
-            try:
-                result = sandbox.run(
-                    command,
-                    unit.sandboxes / name,
-                    limits,
-                    limits.submission_seconds,
-                    use_sandbox=unit.use_sandbox,
-                    stdin=nbformat.writes(nb),
-                    course=unit.sandboxes,
-                )
-                executed = None
-                if result.stdout.strip():
-                    try:
-                        executed = nbformat.reads(result.stdout, as_version=4)
-                    except Exception:  # cut or damaged: the notebook's run is not trusted
-                        problem = "answered with something that is not a notebook"
-                else:
-                    problem = result.stderr.strip()[-500:] or "stopped with no output"
-            except subprocess.TimeoutExpired:
-                executed = None
-                problem = (
-                    f"ran out of its {limits.submission_seconds} s (all cells and the "
-                    "kernel's start); the cells after that never ran"
-                )
+            text, problem = unit.server.run(name, nbformat.writes(nb))
+            executed = None
+            if text is not None:
+                try:
+                    executed = nbformat.reads(text, as_version=4)
+                except Exception:  # damaged: the notebook's run is not trusted
+                    problem = "answered with something that is not a notebook"
             unit.timings["notebooks"] += time.monotonic() - began
             if executed is None:
                 mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
@@ -170,7 +151,7 @@ def _sandboxed_execute_class(unit: _Unit):
             unit.timings["cells"] += _cell_seconds(executed)
             found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
             unit.problems.extend(f"{name}: {problem}" for problem in found)
-            unit.problems.extend(_cells_that_stopped(name, nb, executed, limits.cell_seconds))
+            unit.problems.extend(_cells_that_stopped(name, nb, executed, unit.limits.cell_seconds))
             return executed, resources
 
     return SandboxedExecute
@@ -237,6 +218,125 @@ def _cells_that_stopped(name: str, sent: Any, executed: Any, cell_seconds: int) 
     return said
 
 
+class _Server:
+    """The sandbox that runs one student's notebooks, one after the other (``execute.py --serve``).
+
+    One sandbox and one pre-warmed kernel launcher serve all of the student's notebooks, each
+    in a new kernel, so the libraries are imported once per student rather than once per
+    notebook. A notebook that runs out of time, or a sandbox that dies, costs that notebook
+    only: the sandbox is killed and a new one serves the next notebook.
+    """
+
+    def __init__(self, folder: Path, limits: Any, use_sandbox: bool) -> None:
+        self.folder = folder
+        self.limits = limits
+        self.use_sandbox = use_sandbox
+        self.process: Optional[subprocess.Popen] = None
+        self.errors: Any = None
+
+    def _start(self) -> subprocess.Popen:
+        from autograder.sandbox import sandboxed_command
+
+        command = [sys.executable, str(_EXECUTE), "--serve", str(self.limits.cell_seconds)]
+        if self.use_sandbox:
+            command = sandboxed_command(
+                [*command, "--sandboxed"], self.folder, self.limits, course=self.folder
+            )
+        self.errors = tempfile.TemporaryFile()  # noqa: SIM115 - open for the sandbox's life
+        return subprocess.Popen(
+            command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self.errors,
+            cwd=self.folder,
+            start_new_session=True,
+        )
+
+    def run(self, name: str, text: str) -> Tuple[Optional[str], str]:
+        """Run notebook ``name`` (its folder's name); its executed text, or None and why."""
+        from autograder.execute import frame
+
+        seconds = self.limits.submission_seconds
+        deadline = time.monotonic() + seconds
+        if self.process is None:
+            self.process = self._start()
+        request = frame(json.dumps({"folder": name, "notebook": text}).encode("utf-8"))
+        try:
+            _write_all(self.process.stdin, request, deadline)
+            size = int.from_bytes(_read_exact(self.process.stdout, 8, deadline), "big")
+            if size > self.limits.output_bytes:
+                self.stop()
+                return None, f"answered with {size} bytes, more than the grader reads"
+            reply = json.loads(_read_exact(self.process.stdout, size, deadline))
+        except TimeoutError:
+            self.stop()
+            return None, (
+                f"ran out of its {seconds} s (all cells and the kernel's start); the cells "
+                "after that never ran"
+            )
+        except (OSError, EOFError, ValueError):
+            why = self._last_words() or "stopped with no output"
+            self.stop()
+            return None, why
+        if "notebook" not in reply:
+            return None, str(reply.get("problem", "gave no notebook"))[:500]
+        return str(reply["notebook"]), ""
+
+    def _last_words(self) -> str:
+        if self.errors is None:
+            return ""
+        self.errors.seek(0)
+        return self.errors.read(1_000_000).decode("utf-8", errors="replace").strip()[-500:]
+
+    def stop(self) -> None:
+        """End the sandbox and everything in it."""
+        if self.process is None:
+            return
+        with contextlib.suppress(OSError):
+            self.process.stdin.close()
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.process.pid, signal.SIGKILL)
+        self.process.wait()
+        self.process.stdout.close()
+        self.errors.close()
+        self.process = self.errors = None
+
+
+def _write_all(stream: Any, data: bytes, deadline: float) -> None:
+    """Write ``data`` to a pipe before ``deadline`` (monotonic), or raise TimeoutError."""
+    import select
+
+    fd = stream.fileno()
+    os.set_blocking(fd, False)
+    view = memoryview(data)
+    while view:
+        left = deadline - time.monotonic()
+        if left <= 0 or not select.select([], [fd], [], left)[1]:
+            raise TimeoutError
+        try:
+            view = view[os.write(fd, view) :]
+        except BlockingIOError:
+            continue
+
+
+def _read_exact(stream: Any, size: int, deadline: float) -> bytes:
+    """Read ``size`` bytes from a pipe before ``deadline``; EOFError if it closes first."""
+    import select
+
+    fd = stream.fileno()
+    chunks, got = [], 0
+    while got < size:
+        left = deadline - time.monotonic()
+        if left <= 0 or not select.select([fd], [], [], left)[0]:
+            raise TimeoutError
+        chunk = os.read(fd, min(size - got, 1 << 20))
+        if not chunk:
+            raise EOFError
+        chunks.append(chunk)
+        got += len(chunk)
+    return b"".join(chunks)
+
+
 @dataclasses.dataclass
 class _Unit:
     """One student's grading, inside the unit's process."""
@@ -261,6 +361,7 @@ class _Unit:
         self.root = self.folder / "nbgrader"
         self.sandboxes = self.folder / "sandboxes"
         self.export = self.folder / "export"
+        self.server = _Server(self.sandboxes, self.limits, self.use_sandbox)
 
     def hand_in(self, name: str, aside: List[str]) -> bool:
         """Repair one notebook and lay it out for nbgrader, the sandbox and the export."""
@@ -310,6 +411,12 @@ class _Unit:
             for pp in _default_autograde_preprocessors()
         ]
         api = _api(config)
+        try:
+            return self._grade(api, config, began)
+        finally:
+            self.server.stop()
+
+    def _grade(self, api: Any, config: Any, began: float) -> Dict[str, Any]:
         aside: List[str] = []
         handed_in = [name for name in self.course if self.hand_in(name, aside)]
         messages: Dict[Tuple[str, str], str] = {}
@@ -327,6 +434,7 @@ class _Unit:
                 shutil.copy(graded, self.folder / "autograded" / f"{name}.ipynb")
             for grade_id, message in failure_messages(graded).items():
                 messages[(name, grade_id)] = message
+        self.server.stop()
         cells = _scores(config, self.student, self.names)
         driving = None
         if self.task.get("driving"):

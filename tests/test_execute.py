@@ -7,6 +7,8 @@ usual way (``DUCKIE_KERNEL_ZYGOTE=0``), and compares what the notebook shows.
 
 from __future__ import annotations
 
+import io
+import json
 import os
 import subprocess
 import sys
@@ -237,3 +239,73 @@ def test_the_zygote_refuses_a_kernel_of_another_environment() -> None:
         timeout=120,
     )
     assert result.stdout.split() == ["None", "None"], result.stderr
+
+
+def _serve(tmp_path: Path, notebooks: Sequence[Tuple[str, str]], sandboxed: bool) -> List[dict]:
+    """Run ``(folder, notebook text)`` pairs through one ``execute.py --serve``; its replies."""
+    from autograder.execute import frame, read_frame
+    from autograder.sandbox import NOBODY, Limits, sandboxed_command
+
+    command = [sys.executable, str(EXECUTE), "--serve", "20"]
+    for folder, _ in notebooks:
+        (tmp_path / folder).mkdir(exist_ok=True)
+    if sandboxed:
+        for path in [tmp_path, *tmp_path.iterdir()]:
+            os.chown(path, NOBODY, NOBODY)
+        command = sandboxed_command([*command, "--sandboxed"], tmp_path, Limits(), course=tmp_path)
+    requests = b"".join(
+        frame(json.dumps({"folder": folder, "notebook": text}).encode())
+        for folder, text in notebooks
+    )
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
+    done = subprocess.run(
+        command,
+        input=requests,
+        capture_output=True,
+        timeout=180,
+        cwd=tmp_path,
+        env=env,
+        check=False,
+    )
+    stream = io.BytesIO(done.stdout)
+    replies = []
+    while (data := read_frame(stream)) is not None:
+        replies.append(json.loads(data))
+    assert len(replies) == len(notebooks), done.stderr.decode()
+    return replies
+
+
+def _printed(reply: dict) -> List[str]:
+    notebook = nbformat.reads(reply["notebook"], as_version=4)
+    return [
+        "".join(output.get("text", "") for output in cell.outputs if output.output_type == "stream")
+        for cell in notebook.cells
+    ]
+
+
+def test_one_server_runs_each_notebook_in_a_new_kernel_in_its_own_folder(tmp_path):
+    first = _notebook([FORKED, "import os\nsecret = 42\nprint(os.getcwd())"])
+    second = _notebook([FORKED, "import os\nprint(os.getcwd(), 'secret' in globals())"])
+    replies = _serve(tmp_path, [("05_odometry", first), ("06_driving", second)], sandboxed=False)
+    assert _printed(replies[0]) == ["True\n", f"{tmp_path / '05_odometry'}\n"]
+    assert _printed(replies[1]) == ["True\n", f"{tmp_path / '06_driving'} False\n"]
+
+
+@pytest.mark.slow
+def test_in_the_sandbox_what_a_notebook_leaves_running_is_gone_before_the_next(tmp_path):
+    import shutil
+
+    if shutil.which("bwrap") is None:
+        pytest.skip("bubblewrap is not installed; run `make ros`.")
+    leave = _notebook(
+        ["import subprocess\nchild = subprocess.Popen(['sleep', '600'], start_new_session=True)\n"
+         "open('../pid.txt', 'w').write(str(child.pid))\nprint('started')"]
+    )  # fmt: skip
+    look = _notebook(
+        ["import os\npid = int(open('../pid.txt').read())\n"
+         "try:\n    os.kill(pid, 0)\n    print('still there')\n"
+         "except ProcessLookupError:\n    print('gone')"]
+    )  # fmt: skip
+    replies = _serve(tmp_path, [("01_a", leave), ("02_b", look)], sandboxed=True)
+    assert _printed(replies[0]) == ["started\n"]
+    assert _printed(replies[1]) == ["gone\n"]
