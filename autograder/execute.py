@@ -53,6 +53,38 @@ TIMEOUT_ERROR = {
 GUARD_SETUP = r"""
 def _setup():
     import builtins, os, sys, types
+    # Writes outside the student's folders are noted for the grader (the sandbox refuses them;
+    # an audit hook cannot be removed, so the note survives the student's code).
+    home = os.path.dirname(os.getcwd()) + os.sep
+    allowed = (home, "/tmp/", "/dev/", "/proc/")
+    writing = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC
+    changes = {"os.remove", "os.rename", "os.mkdir", "os.rmdir", "os.symlink", "os.link",
+               "os.chmod", "os.truncate", "shutil.rmtree"}
+    busy = []
+
+    def audit(event, args):
+        if busy or (event != "open" and event not in changes):
+            return
+        if event == "open":
+            path, mode, flags = args
+            if not ((flags or 0) & writing or (isinstance(mode, str) and set(mode) & set("wax+"))):
+                return
+        else:
+            path = args[0]
+        if not isinstance(path, (str, bytes, os.PathLike)):
+            return
+        busy.append(True)
+        try:
+            full = os.path.abspath(os.fsdecode(path))
+            if not (full + os.sep).startswith(allowed):
+                with open(WRITES_FILE, "a", encoding="utf-8") as noted:
+                    noted.write(full + "\n")
+        except Exception:
+            pass
+        finally:
+            busy.pop()
+
+    sys.addaudithook(audit)
     # The real modules, not a student's numpy.py next to the notebook.
     path = list(sys.path)
     sys.path[:] = [p for p in path if p not in ("", ".", os.getcwd())]
@@ -120,6 +152,10 @@ def _setup():
 _setup()
 del _setup
 """
+
+#: Where the guard notes the paths a notebook tried to write outside the student's folders.
+WRITES_FILE = "/tmp/.grader-writes"
+GUARD_SETUP = GUARD_SETUP.replace("WRITES_FILE", repr(WRITES_FILE))
 
 #: Run before each test cell: puts the originals back, returns what had been replaced.
 GUARD_CHECK = '__import__("sys").modules["__grader_guard__"].check()'
@@ -839,7 +875,33 @@ def _execute(notebook: Any, folder: str, cell_seconds: int, zygote: Optional[Zyg
             "the originals were put back for the test"
         )
     problems += limit_outputs(notebook)
+    problems += _writes_outside()
     notebook.metadata[METADATA_KEY] = {"problems": problems}
+
+
+def _writes_outside() -> List[str]:
+    """What the guard noted the notebook tried to write outside the student's folders.
+
+    The note is then removed, for the next notebook. It lies in the sandbox's ``/tmp``, where
+    the student's code may put anything: it is read only if it is a regular file.
+    """
+    import stat
+
+    path = Path(WRITES_FILE)
+    try:
+        handle = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return []
+    with os.fdopen(handle, "rb") as noted:
+        text = noted.read(100_000) if stat.S_ISREG(os.fstat(handle).st_mode) else b""
+    with contextlib.suppress(OSError):
+        path.unlink()
+    lines = text.decode("utf-8", errors="replace").splitlines()
+    paths = [line for line in dict.fromkeys(line.strip() for line in lines) if line]
+    if not paths:
+        return []
+    shown = ", ".join(paths[:5]) + (f" and {len(paths) - 5} more" if len(paths) > 5 else "")
+    return [f"the notebook tried to write outside the student's folders: {shown}"]
 
 
 def _private_streams() -> Tuple[Any, Any]:

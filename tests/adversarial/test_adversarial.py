@@ -136,6 +136,7 @@ def test_a_well_behaved_student_in_the_same_class_gets_full_marks(graded):
         ("sys_exit", "SystemExit"),
         ("infinite_loop", "CellTimeoutError: still running after the 5 s a cell may take"),
         ("raises_outside_tests", "NameError"),
+        ("write_outside", "03_frames: the notebook tried to write outside the student's folders: "),
     ],
 )
 def test_the_instructor_is_told_what_happened(graded, name, words):
