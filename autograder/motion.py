@@ -302,6 +302,8 @@ def _match_moves(
 def _turn_words(angle: float) -> str:
     """An angle in radians as people say it: ``"90° clockwise"``."""
     degrees = math.degrees(angle)
+    if not math.isfinite(degrees):  # a move of a state that never began
+        return "an unknown angle"
     if round(abs(degrees)) == 0:
         return "0°"
     return f"{abs(degrees):.0f}° {'counter-clockwise' if degrees > 0 else 'clockwise'}"

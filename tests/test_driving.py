@@ -289,3 +289,16 @@ def test_a_bag_over_the_bound_is_not_read(tmp_path):
         "The mission's bag was not read: it is 300.0 MB; at most 200.0 MB is read."
     ]
     assert all(_plain(reason) for reason in driving.reasons)
+
+
+def test_a_mission_stuck_in_its_square_is_scored_state_by_state(tmp_path, reference):
+    # A one-line odometry bug: the counts themselves for their change. The square never ends.
+    solution = changed(
+        reference, "ticks_turned = ticks - prev_ticks", "ticks_turned = ticks", tmp_path / "s.py"
+    )
+    with pytest.raises(MissionError):
+        run_mission(solution=solution, out=tmp_path / "run", animation=False)
+    driving = score_bag(tmp_path / "run")
+    assert driving.parts["return"] == driving.parts["circle"] == 0
+    assert driving.parts["bag"] == POINTS["bag"]
+    assert "State 4 (return) never began, so its driving could not be checked." in driving.reasons

@@ -9,6 +9,7 @@ is left, and a student whose files changed is graded again.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import shutil
 import signal
@@ -170,3 +171,24 @@ def test_ctrl_c_keeps_the_students_graded_so_far_and_the_next_run_finishes(sandb
     assert len(graded_now) == 4 - len(kept)
     rows = (out / "grades.csv").read_text().splitlines()
     assert [row.split(",")[0] for row in rows[1:]] == ["ada", "ben", "cy", "dee"]
+
+
+def test_a_unit_that_cannot_grade_says_so_and_asks_to_be_run_again(tmp_path):
+    from autograder.results import from_data
+    from autograder.unit import run_unit
+
+    task = {
+        "student": "ada",
+        "names": [ASSIGNMENT],
+        "course": [ASSIGNMENT],
+        "limits": dataclasses.asdict(LIMITS),
+        "use_sandbox": False,
+        "driving": False,
+    }
+    answer = run_unit(task, {f"{ASSIGNMENT}/{ASSIGNMENT}.ipynb": b"{}"}, tmp_path / "no-course")
+    result = from_data(answer["result"])
+    assert not result.complete
+    (problem,) = result.problems
+    assert problem.startswith("Grading stopped: the grader's process for this student stopped (")
+    assert problem.endswith("; run duckie grade again to retry.")
+    assert answer["autograded"] == {}
