@@ -349,6 +349,9 @@ def _client(jobs: int, scheduler: Optional[str]) -> Tuple[Any, Any]:
         threads_per_worker=1,
         processes=True,
         dashboard_address=None,
+        # No dashboard; the scheduler's small HTTP server (health, metrics) on any free port,
+        # so that two gradings at once never compete for Dask's usual 8787.
+        scheduler_kwargs={"dashboard_address": ":0"},
         silence_logs=logging.ERROR,
         # A worker's memory is its units' business (each is a process of its own).
         memory_limit=0,

@@ -89,7 +89,7 @@ def test_the_bench_grades_one_copy_of_one_assignment_four_ways():
     assert values["submissions"] == "1"
     assert values["notebooks_per_submission"] == "1"
     assert values["all_full_marks"] == "yes"
-    timed = [name for name in FIGURES if name.endswith(("_per_submission", "_vs_nbgrader"))]
+    timed = [name for name in FIGURES if name.endswith(("_s_per_submission", "_vs_nbgrader"))]
     for name in timed:
         assert re.fullmatch(r"\d+\.\d+", values[name]), (name, values[name])
         assert float(values[name]) > 0, name
