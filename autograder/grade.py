@@ -241,6 +241,7 @@ class _Writer:
         result.cells = {cell: result.cells[cell] for cell in sorted(result.cells)}
         self._explain(result)
         self._save_grades(result, sorted(autograded))
+        self.read_people_grades([result])
         for name, text in autograded.items():
             path = self.out / "work" / "autograded" / result.student / name / f"{name}.ipynb"
             write_atomic(path, text)
@@ -279,6 +280,7 @@ class _Writer:
         from nbgrader.api import Gradebook, MissingEntry
 
         scores = dict(result.cells)
+        waiting = set(result.to_grade)
         with Gradebook(self.db_url) as gradebook:
             gradebook.update_or_create_student(result.student)
             for name in graded:
@@ -288,9 +290,46 @@ class _Writer:
                     submission = gradebook.add_submission(name, result.student)
                 for notebook in submission.notebooks:
                     for grade in notebook.grades:
-                        if (name, grade.name) in scores:
-                            grade.auto_score = scores[(name, grade.name)][0]
+                        key = (name, grade.name)
+                        if key not in scores:
+                            continue
+                        # As nbgrader's SaveAutoGrades: a person's grade is never touched, and
+                        # a cell with a person's grade or none automatic is to be reviewed.
+                        grade.auto_score = None if key in waiting else scores[key][0]
+                        grade.needs_manual_grade = (
+                            grade.manual_score is not None or grade.auto_score is None
+                        )
             gradebook.db.commit()
+
+    def read_people_grades(self, results: List[StudentResult]) -> None:
+        """Put the grades people gave in Formgrader over the automatic ones, in ``results``.
+
+        A cell a person graded scores what they gave; an answer in words nobody graded yet
+        stays in ``to_grade``. Read at every run, so grades given since the last one show.
+        """
+        from nbgrader.api import Gradebook, MissingEntry
+
+        with Gradebook(self.db_url) as gradebook:
+            for result in results:
+                waiting = []
+                for name in sorted({name for name, _ in result.cells}):
+                    try:
+                        submission = gradebook.find_submission(name, result.student)
+                    except MissingEntry:
+                        continue
+                    for notebook in submission.notebooks:
+                        for grade in notebook.grades:
+                            key = (name, grade.name)
+                            if key not in result.cells:
+                                continue
+                            if grade.manual_score is not None:
+                                result.cells[key] = (
+                                    float(grade.manual_score),
+                                    result.cells[key][1],
+                                )
+                            elif grade.auto_score is None:
+                                waiting.append(key)
+                result.to_grade = waiting
 
     def write_csv(self) -> None:
         results = [self.results[name] for name in sorted(self.results)]
@@ -298,7 +337,8 @@ class _Writer:
         buffer = io.StringIO()
         writer = csv.writer(buffer)
         writer.writerow(
-            ["student", "total", "max_total", "driving_score", "problems", "driving_problems"]
+            ["student", "total", "max_total", "to_grade", "driving_score", "problems"]
+            + ["driving_problems"]
             + [f"{assignment}:{grade_id}" for assignment, grade_id in columns]
         )
         for result in results:
@@ -308,11 +348,17 @@ class _Writer:
                     result.student,
                     f"{result.total:g}",
                     f"{result.max_total:g}",
+                    str(len(result.to_grade)),
                     "" if driving is None else f"{driving.score:g}",
                     " | ".join(result.problems),
                     "" if driving is None else " | ".join(driving.reasons),
                 ]
-                + [f"{result.cells[key][0]:g}" if key in result.cells else "" for key in columns]
+                + [
+                    f"{result.cells[key][0]:g}"
+                    if key in result.cells and key not in result.to_grade
+                    else ""
+                    for key in columns
+                ]
             )
         write_atomic(self.out / "grades.csv", buffer.getvalue())
 
@@ -436,6 +482,7 @@ def grade_class(
         key = _fingerprint(setup.key, options, files, collected.left_out)
         kept = _kept(out, student, key)
         if kept is not None:
+            writer.read_people_grades([kept])
             writer.results[student] = kept
             continue
         said = _left_out(collected.left_out, names)

@@ -35,6 +35,8 @@ class StudentResult:
         seconds: wall-clock seconds spent on this student.
         complete: False when the grading itself stopped (a crash, the grader's time limit):
             the next ``duckie grade`` grades this student again.
+        to_grade: the graded cells that wait for a person (an answer in words): no automatic
+            score, and none given yet in nbgrader's Formgrader. They count 0 until graded.
         timings: where the unit's time went, in seconds: ``notebooks`` (the sandboxed runs,
             kernels' starts included), ``cells`` (the cells themselves), ``nbgrader`` (its
             converters and gradebook), ``driving`` (export and mission), ``unit`` (all).
@@ -47,6 +49,7 @@ class StudentResult:
     driving: Optional[Driving] = None
     seconds: float = 0.0
     complete: bool = True
+    to_grade: List[Tuple[str, str]] = field(default_factory=list)
     timings: Dict[str, float] = field(default_factory=dict)
 
     @property
@@ -84,6 +87,7 @@ def to_data(result: StudentResult) -> Dict[str, Any]:
         "driving": driving,
         "seconds": result.seconds,
         "complete": result.complete,
+        "to_grade": [_key(cell) for cell in result.to_grade],
         "timings": dict(result.timings),
     }
 
@@ -105,6 +109,7 @@ def from_data(data: Dict[str, Any]) -> StudentResult:
         driving=driving,
         seconds=float(data.get("seconds", 0.0)),
         complete=bool(data.get("complete", True)),
+        to_grade=[_pair(str(key)) for key in data.get("to_grade", [])],
         timings={str(key): float(value) for key, value in data.get("timings", {}).items()},
     )
 

@@ -435,7 +435,7 @@ class _Unit:
             for grade_id, message in failure_messages(graded).items():
                 messages[(name, grade_id)] = message
         self.server.stop()
-        cells = _scores(config, self.student, self.names)
+        cells, to_grade = _scores(config, self.student, self.names)
         driving = None
         if self.task.get("driving"):
             from autograder.driving import Driving, drive
@@ -463,7 +463,7 @@ class _Unit:
         return to_data(
             StudentResult(
                 self.student, cells=cells, problems=self.problems, messages=messages,
-                driving=driving, timings=self.timings,
+                driving=driving, timings=self.timings, to_grade=to_grade,
             )
         )  # fmt: skip
 
@@ -505,11 +505,16 @@ def _why(outcome: Dict[str, object]) -> str:
 
 def _scores(
     config: Any, student: str, names: List[str]
-) -> Dict[Tuple[str, str], Tuple[float, float]]:
-    """The student's scores from the unit's gradebook; a test never graded scores 0."""
+) -> Tuple[Dict[Tuple[str, str], Tuple[float, float]], List[Tuple[str, str]]]:
+    """The student's scores from the unit's gradebook, and the cells that wait for a person.
+
+    A test never graded scores 0; an answer in words has no automatic score: it waits for a
+    person's grade (nbgrader's Formgrader) and scores 0 until then.
+    """
     from nbgrader.api import Gradebook, MissingEntry
 
     cells: Dict[Tuple[str, str], Tuple[float, float]] = {}
+    to_grade: List[Tuple[str, str]] = []
     with Gradebook(config.CourseDirectory.db_url) as gradebook:
         for name in names:
             for notebook in gradebook.find_assignment(name).notebooks:
@@ -522,7 +527,9 @@ def _scores(
             for notebook in submission.notebooks:
                 for grade in notebook.grades:
                     cells[(name, grade.name)] = (float(grade.score), float(grade.max_score))
-    return cells
+                    if grade.auto_score is None:
+                        to_grade.append((name, grade.name))
+    return cells, to_grade
 
 
 def main(argv: Optional[List[str]] = None) -> int:

@@ -1,0 +1,102 @@
+"""Answers graded by a person: they wait in the gradebook, and a grade given there is never lost.
+
+A course source with one answer cell in words (an nbgrader manually graded cell) next to the
+autograded tests of 03_frames. ``duckie grade`` leaves the answer to a person: it counts for
+nothing until graded, its column stays empty and ``to_grade`` counts it. A grade given in the
+gradebook (as nbgrader's Formgrader gives it) shows at the next run, and stays when the
+student's files change and they are graded again.
+"""
+
+from __future__ import annotations
+
+import csv
+import shutil
+
+import nbformat
+import pytest
+
+from autograder.bench import filled_notebook
+from autograder.course import ROOT
+from autograder.grade import grade_class
+from autograder.sandbox import Limits, check_sandbox
+
+pytestmark = pytest.mark.slow
+
+ASSIGNMENT = "03_frames"
+ANSWER = "answer_frames"
+
+
+def _answer_cell(text: str):
+    return nbformat.v4.new_markdown_cell(
+        text,
+        metadata={
+            "nbgrader": {
+                "grade": True,
+                "solution": True,
+                "locked": False,
+                "task": False,
+                "points": 2,
+                "grade_id": ANSWER,
+                "schema_version": 3,
+            }
+        },
+    )
+
+
+def _rows(out):
+    with (out / "grades.csv").open() as handle:
+        return {row["student"]: row for row in csv.DictReader(handle)}
+
+
+def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(tmp_path):
+    if shutil.which("bwrap") is None:
+        pytest.skip("bubblewrap is not installed; run `make ros`.")
+    check_sandbox()
+    source = tmp_path / "source"
+    shutil.copytree(ROOT / "solutions" / ASSIGNMENT, source / ASSIGNMENT)
+    path = source / ASSIGNMENT / f"{ASSIGNMENT}.ipynb"
+    notebook = nbformat.read(path, as_version=4)
+    notebook.cells.append(_answer_cell("A full answer names the rotation by theta."))
+    nbformat.write(notebook, path)
+    student = filled_notebook(ASSIGNMENT)
+    student.cells.append(_answer_cell("The robot frame turns with theta, so I rotate by it."))
+    folder = tmp_path / "submissions" / "ada" / ASSIGNMENT
+    folder.mkdir(parents=True)
+    nbformat.write(student, folder / f"{ASSIGNMENT}.ipynb")
+    out = tmp_path / "out"
+    options = {"names": [ASSIGNMENT], "source": source, "driving": False, "limits": Limits()}
+
+    (first,) = grade_class(tmp_path / "submissions", out, **options)
+    assert first.to_grade == [(ASSIGNMENT, ANSWER)]
+    assert first.total == 9
+    assert first.max_total == 11
+    row = _rows(out)["ada"]
+    assert (row["to_grade"], row[f"{ASSIGNMENT}:{ANSWER}"], row["total"]) == ("1", "", "9")
+    page = (out / "feedback" / "ada.html").read_text()
+    assert "your instructor grades this answer" in page
+
+    from nbgrader.api import Gradebook
+
+    database = f"sqlite:///{out / 'work' / 'gradebook.db'}"
+    with Gradebook(database) as gradebook:
+        grade = gradebook.find_grade(ANSWER, ASSIGNMENT, ASSIGNMENT, "ada")
+        assert grade.needs_manual_grade
+        assert grade.auto_score is None
+        grade.manual_score = 1.5  # what a person gives in Formgrader
+        gradebook.db.commit()
+
+    (again,) = grade_class(tmp_path / "submissions", out, **options)
+    assert again.to_grade == []
+    row = _rows(out)["ada"]
+    assert (row["to_grade"], row[f"{ASSIGNMENT}:{ANSWER}"], row["total"]) == ("0", "1.5", "10.5")
+
+    # The student hands in again: graded anew, and the person's grade stays.
+    student.cells.insert(2, nbformat.v4.new_code_cell("print('one more try')"))
+    nbformat.write(student, folder / f"{ASSIGNMENT}.ipynb")
+    (regraded,) = grade_class(tmp_path / "submissions", out, **options)
+    assert regraded.total == 10.5
+    with Gradebook(database) as gradebook:
+        grade = gradebook.find_grade(ANSWER, ASSIGNMENT, ASSIGNMENT, "ada")
+        assert grade.manual_score == 1.5
+        assert grade.needs_manual_grade  # nbgrader's rule: a person's grade is to be reviewed
+    assert _rows(out)["ada"][f"{ASSIGNMENT}:{ANSWER}"] == "1.5"
