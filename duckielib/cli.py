@@ -273,6 +273,21 @@ def _grade(args: argparse.Namespace) -> int:
     return 0
 
 
+def _formgrade(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from autograder.formgrade import command, prepare
+
+    work = prepare(Path(args.out))
+    argv = command(work, args.lab_args)
+    print(f"duckie: opening nbgrader's Formgrader on {work} (Ctrl-C stops it).", flush=True)
+    # JupyterLab as instructors start it: nbgrader's tools on, the students' settings off.
+    env = {key: value for key, value in os.environ.items() if key != "JUPYTER_CONFIG_PATH"}
+    os.chdir(work)
+    os.execve(argv[0], argv, env)
+    return 0  # pragma: no cover - execve does not return
+
+
 def _add_grade(commands: argparse._SubParsersAction) -> None:
     """``duckie grade``: autograde a class with nbgrader, each submission in a sandbox."""
     grade = commands.add_parser(
@@ -305,6 +320,15 @@ def _add_grade(commands: argparse._SubParsersAction) -> None:
         help="run student code without bubblewrap (only where it cannot be installed)",
     )
     grade.set_defaults(handler=_grade)
+    formgrade = commands.add_parser(
+        "formgrade",
+        help="grade the answers in words of a graded class in nbgrader's Formgrader (JupyterLab)",
+    )
+    formgrade.add_argument("out", help="the folder `duckie grade --out` wrote")
+    formgrade.add_argument(
+        "lab_args", nargs="*", help="more JupyterLab options, after -- (-- --port=8890)"
+    )
+    formgrade.set_defaults(handler=_formgrade)
 
 
 def _parser() -> argparse.ArgumentParser:

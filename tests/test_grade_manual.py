@@ -2,15 +2,24 @@
 
 A course source with one answer cell in words (an nbgrader manually graded cell) next to the
 autograded tests of 03_frames. ``duckie grade`` leaves the answer to a person: it counts for
-nothing until graded, its column stays empty and ``to_grade`` counts it. A grade given in the
-gradebook (as nbgrader's Formgrader gives it) shows at the next run, and stays when the
-student's files change and they are graded again.
+nothing until graded, its column stays empty and ``to_grade`` counts it. A grade given in
+nbgrader's Formgrader, opened on the graded class by ``duckie formgrade``, shows at the next
+run, and stays when the student's files change and they are graded again.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
+import json
+import os
 import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
 
 import nbformat
 import pytest
@@ -41,6 +50,49 @@ def _answer_cell(text: str):
             }
         },
     )
+
+
+@contextlib.contextmanager
+def _formgrader(out):
+    """``duckie formgrade OUT`` running; a function that calls its pages and API."""
+    port, token = _free_port(), "formgrade-test"
+    command = [sys.executable, "-m", "duckielib.cli", "formgrade", str(out), "--"]
+    command += ["--no-browser", f"--port={port}", f"--ServerApp.token={token}"]
+    server = subprocess.Popen(
+        command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
+    )
+
+    def ask(method, path, body=None, as_json=True):
+        request = urllib.request.Request(
+            f"http://127.0.0.1:{port}/formgrader/{path}",
+            method=method,
+            data=None if body is None else json.dumps(body).encode(),
+            headers={"Authorization": f"token {token}"},
+        )
+        with urllib.request.urlopen(request, timeout=30) as answer:
+            text = answer.read().decode()
+        return json.loads(text) if as_json else text
+
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                ask("GET", "api/assignments")
+                break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise
+                time.sleep(0.3)
+        yield ask
+    finally:
+        os.killpg(server.pid, signal.SIGTERM)
+        server.wait(timeout=30)
+
+
+def _free_port():
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
 
 
 def _rows(out):
@@ -75,6 +127,8 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(tmp_path):
     page = (out / "feedback" / "ada.html").read_text()
     assert "your instructor grades this answer" in page
 
+    # A person grades the answer in Formgrader, opened by `duckie formgrade`: its page shows the
+    # student's answer, and its API (what the page calls) takes the points.
     from nbgrader.api import Gradebook
 
     database = f"sqlite:///{out / 'work' / 'gradebook.db'}"
@@ -82,8 +136,15 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(tmp_path):
         grade = gradebook.find_grade(ANSWER, ASSIGNMENT, ASSIGNMENT, "ada")
         assert grade.needs_manual_grade
         assert grade.auto_score is None
-        grade.manual_score = 1.5  # what a person gives in Formgrader
-        gradebook.db.commit()
+    with _formgrader(out) as ask:
+        (submitted,) = ask("GET", f"api/submitted_notebooks/{ASSIGNMENT}/{ASSIGNMENT}")
+        assert (submitted["student"], submitted["needs_manual_grade"]) == ("ada", True)
+        page = ask("GET", f"submissions/{submitted['id']}/?index=0", as_json=False)
+        assert "The robot frame turns with theta, so I rotate by it." in page
+        grades = ask("GET", f"api/grades?submission_id={submitted['id']}")
+        (answer,) = [grade for grade in grades if grade["name"] == ANSWER]
+        given = ask("PUT", f"api/grade/{answer['id']}", {"manual_score": 1.5})
+        assert given["manual_score"] == 1.5
 
     (again,) = grade_class(tmp_path / "submissions", out, **options)
     assert again.to_grade == []
@@ -100,3 +161,13 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(tmp_path):
         assert grade.manual_score == 1.5
         assert grade.needs_manual_grade  # nbgrader's rule: a person's grade is to be reviewed
     assert _rows(out)["ada"][f"{ASSIGNMENT}:{ANSWER}"] == "1.5"
+
+
+def test_duckie_formgrade_refuses_a_folder_that_was_never_graded(tmp_path):
+    command = [sys.executable, "-m", "duckielib.cli", "formgrade", str(tmp_path / "grading")]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"duckie: {tmp_path / 'grading'} has no gradebook: grade the class first with "
+        f"`duckie grade SUBMISSIONS --out {tmp_path / 'grading'}`.\n"
+    )
