@@ -967,8 +967,7 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
         sandboxed: whether this runs in a sandbox of its own (its own user and process
             namespace): only then are processes a notebook left behind killed before the next.
     """
-    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
-    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
+    zygote = _start()
     import nbformat
 
     given, answer = _private_streams()
@@ -989,6 +988,23 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
         answer.flush()
         if sandboxed:
             _kill_strays(keep)
+    _end(zygote)
+
+
+def _start() -> Optional[Zygote]:
+    """The zygote, unless turned off: forked first, before nbclient, zmq or asyncio is imported.
+
+    See :class:`Zygote`.
+    """
+    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
+    # nbformat validates with jsonschema, whose optional "iri" format checker builds a grammar
+    # at import (about 1.2 s, for a format no notebook uses): leave that package out.
+    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
+    return zygote
+
+
+def _end(zygote: Optional[Zygote]) -> NoReturn:
+    """End the zygote (and the kernels it started), then this process."""
     if zygote is not None:
         zygote.close()
     os._exit(0)  # nothing left to clean up: the sandbox and all in it end with this process
@@ -996,24 +1012,17 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
 
 def main() -> None:
     """Read a notebook on stdin, run it, write it on stdout (``--serve``: many, as frames)."""
-    # First, before this script reads the notebook or imports nbclient: see Zygote.
     if sys.argv[1] == "--serve":
         serve(int(sys.argv[2]), sandboxed="--sandboxed" in sys.argv[3:])
-    zygote = Zygote.start() if os.environ.get(ZYGOTE_VARIABLE, "1") != "0" else None
-    cell_seconds = int(sys.argv[1])
-    # nbformat validates with jsonschema, whose optional "iri" format checker builds a grammar
-    # at import (about 1.2 s, for a format no notebook uses): leave that package out.
-    sys.modules.setdefault("rfc3987_syntax", None)  # type: ignore[arg-type]
+    zygote = _start()
     import nbformat
 
     notebook = nbformat.read(sys.stdin, as_version=4)
     _, answer = _private_streams()
-    _execute(notebook, ".", cell_seconds, zygote)
+    _execute(notebook, ".", int(sys.argv[1]), zygote)
     answer.write(nbformat.writes(notebook).encode("utf-8"))
     answer.flush()
-    if zygote is not None:
-        zygote.close()
-    os._exit(0)  # nothing left to clean up: the sandbox and all in it end with this process
+    _end(zygote)
 
 
 if __name__ == "__main__":

@@ -159,7 +159,7 @@ def collect_folder(
             continue
         for entry in entries:
             name = f"{prefix}{entry.name}"
-            if any(fnmatch(entry.name, pattern) for pattern in skip):
+            if _skipped((entry.name,), skip):
                 continue
             info = entry.stat(follow_symlinks=False)
             if stat.S_ISDIR(info.st_mode):
@@ -189,15 +189,19 @@ def collect_folder(
     return collected
 
 
-def unpack_zip(archive: Union[str, Path], folder_limit: int = FOLDER_LIMIT) -> Collected:
+def unpack_zip(
+    archive: Union[str, Path], skip: Iterable[str] = (), folder_limit: int = FOLDER_LIMIT
+) -> Collected:
     """The files of a ``.zip`` as :func:`collect_folder` gives a folder's, never written to disk.
 
     Members with absolute paths or ``..`` make the whole archive refused; links (zip can hold
     them as Unix modes) are left out; so is everything once ``folder_limit`` bytes are taken.
+    A member with a part of its path matching a pattern of ``skip`` is left out silently.
 
     Raises:
         UnsafeFile: if the archive cannot be read or holds a path outside itself.
     """
+    skip = tuple(skip)
     collected = Collected()
     try:
         with zipfile.ZipFile(archive) as opened:
@@ -208,7 +212,7 @@ def unpack_zip(archive: Union[str, Path], folder_limit: int = FOLDER_LIMIT) -> C
                     raise UnsafeFile(f"it holds the unsafe path {member.filename!r}")
             for member in members:
                 mode = member.external_attr >> 16
-                if member.is_dir():
+                if member.is_dir() or _skipped(PurePosixPath(member.filename).parts, skip):
                     continue
                 if stat.S_IFMT(mode) not in (0, stat.S_IFREG):  # a link, a FIFO...
                     collected.left_out.append(
@@ -235,6 +239,11 @@ def unpack_zip(archive: Union[str, Path], folder_limit: int = FOLDER_LIMIT) -> C
     except UnsafeFile:
         raise
     return collected
+
+
+def _skipped(parts: Iterable[str], skip: Iterable[str]) -> bool:
+    """Whether any part of a path matches a glob pattern of ``skip``."""
+    return any(fnmatch(part, pattern) for part in parts for pattern in skip)
 
 
 def write_files(folder: Path, files: Dict[str, bytes]) -> None:

@@ -53,6 +53,8 @@ __all__ = [
     "read_submission",
 ]
 
+#: What of a student's folder is never read: hidden files and folders, Python's caches.
+_SKIPPED = (".*", "__pycache__", "*.pyc")
 #: Bumped when what a unit computes changes, so results kept from before are graded again.
 GRADER_VERSION = 2
 
@@ -114,20 +116,17 @@ def read_submission(path: Path, course: List[str]) -> Collected:
                 continue
             if not folder.is_dir():
                 continue
-            part = collect_folder(folder, skip=(".*", "__pycache__", "*.pyc"))
+            part = collect_folder(folder, skip=_SKIPPED)
             collected.files.update({f"{name}/{key}": data for key, data in part.files.items()})
             collected.left_out += [f"{name}/{said}" for said in part.left_out]
         return collected
-    unpacked = unpack_zip(path)
+    unpacked = unpack_zip(path, skip=_SKIPPED)
     tops = {PurePosixPath(key).parts[0] for key in unpacked.files}
     if not tops & wanted and len(tops) == 1:
         (top,) = tops
         unpacked.files = {key[len(top) + 1 :]: value for key, value in unpacked.files.items()}
     unpacked.files = {
-        key: value
-        for key, value in unpacked.files.items()
-        if PurePosixPath(key).parts[0] in wanted
-        and not any(_hidden(part) for part in PurePosixPath(key).parts)
+        key: value for key, value in unpacked.files.items() if PurePosixPath(key).parts[0] in wanted
     }
     return unpacked
 
@@ -142,10 +141,6 @@ def _left_out(lines: List[str], names: List[str]) -> List[str]:
         elif not rest:
             said.append(line[:1].upper() + line[1:])
     return said
-
-
-def _hidden(part: str) -> bool:
-    return part.startswith(".") or part == "__pycache__"
 
 
 def _fingerprint(*parts: Any) -> str:
@@ -241,7 +236,6 @@ class _Writer:
         result.cells = {cell: result.cells[cell] for cell in sorted(result.cells)}
         self._explain(result)
         self._save_grades(result, sorted(autograded))
-        self.read_people_grades([result])
         for name, text in autograded.items():
             path = self.out / "work" / "autograded" / result.student / name / f"{name}.ipynb"
             write_atomic(path, text)
@@ -275,7 +269,7 @@ class _Writer:
         """The student's scores into the class's gradebook, where nbgrader's tools read them.
 
         Only the assignments that were autograded get a submission, as ``nbgrader autograde``
-        gives them.
+        gives them. The grades people gave are then read back into ``result``.
         """
         from nbgrader.api import Gradebook, MissingEntry
 
@@ -300,6 +294,7 @@ class _Writer:
                             grade.manual_score is not None or grade.auto_score is None
                         )
             gradebook.db.commit()
+            _people_grades(gradebook, result)
 
     def read_people_grades(self, results: List[StudentResult]) -> None:
         """Put the grades people gave in Formgrader over the automatic ones, in ``results``.
@@ -307,29 +302,11 @@ class _Writer:
         A cell a person graded scores what they gave; an answer in words nobody graded yet
         stays in ``to_grade``. Read at every run, so grades given since the last one show.
         """
-        from nbgrader.api import Gradebook, MissingEntry
+        from nbgrader.api import Gradebook
 
         with Gradebook(self.db_url) as gradebook:
             for result in results:
-                waiting = []
-                for name in sorted({name for name, _ in result.cells}):
-                    try:
-                        submission = gradebook.find_submission(name, result.student)
-                    except MissingEntry:
-                        continue
-                    for notebook in submission.notebooks:
-                        for grade in notebook.grades:
-                            key = (name, grade.name)
-                            if key not in result.cells:
-                                continue
-                            if grade.manual_score is not None:
-                                result.cells[key] = (
-                                    float(grade.manual_score),
-                                    result.cells[key][1],
-                                )
-                            elif grade.auto_score is None:
-                                waiting.append(key)
-                result.to_grade = waiting
+                _people_grades(gradebook, result)
 
     def write_csv(self) -> None:
         results = [self.results[name] for name in sorted(self.results)]
@@ -361,6 +338,28 @@ class _Writer:
                 ]
             )
         write_atomic(self.out / "grades.csv", buffer.getvalue())
+
+
+def _people_grades(gradebook: Any, result: StudentResult) -> None:
+    """The grades people gave ``result``'s student, read from an open gradebook into it."""
+    from nbgrader.api import MissingEntry
+
+    waiting = []
+    for name in sorted({name for name, _ in result.cells}):
+        try:
+            submission = gradebook.find_submission(name, result.student)
+        except MissingEntry:
+            continue
+        for notebook in submission.notebooks:
+            for grade in notebook.grades:
+                key = (name, grade.name)
+                if key not in result.cells:
+                    continue
+                if grade.manual_score is not None:
+                    result.cells[key] = (float(grade.manual_score), result.cells[key][1])
+                elif grade.auto_score is None:
+                    waiting.append(key)
+    result.to_grade = waiting
 
 
 def _kept(out: Path, student: str, key: str) -> Optional[StudentResult]:
@@ -482,11 +481,11 @@ def grade_class(
         key = _fingerprint(setup.key, options, files, collected.left_out)
         kept = _kept(out, student, key)
         if kept is not None:
-            writer.read_people_grades([kept])
             writer.results[student] = kept
             continue
         said = _left_out(collected.left_out, names)
         pending.append((student, {**options, "student": student}, collected.files, key, said))
+    writer.read_people_grades(list(writer.results.values()))  # given since the last run
     writer.write_csv()
     if pending:
         _run(pending, setup, writer, jobs, scheduler, progress, started, len(students))

@@ -22,3 +22,15 @@ def pytest_runtest_makereport(item, call):
         reason = report.longrepr[-1] if isinstance(report.longrepr, tuple) else report.longrepr
         report.outcome = "failed"
         report.longrepr = f"Skipped in CI, where every test must run: {reason}"
+
+
+@pytest.fixture(scope="session")
+def sandbox():
+    """The grader's bubblewrap sandbox, checked once: the tests that need it skip without it."""
+    import shutil
+
+    from autograder.sandbox import check_sandbox
+
+    if shutil.which("bwrap") is None:
+        pytest.skip("bubblewrap is not installed; run `make ros`.")
+    check_sandbox()

@@ -4,13 +4,11 @@ from __future__ import annotations
 
 import json
 import re
-import shutil
 
 import pytest
 
 from autograder.bench import check_full_marks, filled_course, reference_answers, run
 from autograder.course import ROOT, CourseError
-from autograder.sandbox import check_sandbox
 
 FIGURES = [
     "submissions",
@@ -79,10 +77,7 @@ def test_the_full_marks_check_names_the_student_and_the_cell():
 @pytest.mark.slow
 @pytest.mark.notebook
 @pytest.mark.timeout(600)
-def test_the_bench_grades_one_copy_of_one_assignment_four_ways():
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
-    check_sandbox()
+def test_the_bench_grades_one_copy_of_one_assignment_four_ways(sandbox):
     figures = run(names=["03_frames"], copies=1)
     assert [name for name, _ in figures] == FIGURES
     values = dict(figures)

@@ -7,11 +7,11 @@ a robot that only pretends to drive, missions that never end, a square turned th
 from __future__ import annotations
 
 import os
-import shutil
 import struct
 import subprocess
 
 import pytest
+from adversarial.cases import NEVER_DRIVES
 
 from autograder.course import ROOT
 from autograder.driving import (
@@ -23,39 +23,14 @@ from autograder.driving import (
     part_points,
     score_bag,
 )
-from autograder.sandbox import Limits, check_sandbox
+from autograder.sandbox import Limits
 from duckielib.runner import MissionError, run_mission
 from duckielib.solution import export_solution
 
 pytestmark = pytest.mark.slow
 
-#: A mission node that announces every state in its colour and holds every stop, but sleeps
-#: instead of driving: the robot never leaves its start.
-NEVER_DRIVES = """
-
-def mission_node(mission):
-    rospy.init_node("mission_node")
-    announce = rospy.Publisher("~state", String, queue_size=10, latch=True)
-    shutdown = rospy.Publisher("shutdown", Empty, queue_size=1)
-    rospy.wait_for_service("light_service_node/set_color", timeout=10.0)
-    set_color = rospy.ServiceProxy("light_service_node/set_color", ChangePattern)
-    for state in mission.states:
-        set_color(String(data=state.color))
-        announce.publish(String(data=state.name))
-        for move in state.moves:
-            rospy.sleep(move.seconds if isinstance(move, Stop) else 2.0)
-    announce.publish(String(data="done"))
-    shutdown.publish(Empty())
-"""
 
 _DONE = 'announce.publish(String(data="done"))'
-
-
-@pytest.fixture(scope="module")
-def sandbox():
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
-    check_sandbox()
 
 
 @pytest.fixture(scope="module")
@@ -107,7 +82,7 @@ def test_the_reference_keeps_full_marks_on_the_realistic_robot(tmp_path, seed):
 
 def test_a_robot_that_never_drives_loses_every_driving_point(tmp_path, reference):
     solution = tmp_path / "solution.py"
-    solution.write_text(reference + NEVER_DRIVES, encoding="utf-8")
+    solution.write_text(reference + "\n\n" + NEVER_DRIVES, encoding="utf-8")
     run_mission(solution, out=tmp_path / "run", animation=False)
     driving = score_bag(tmp_path / "run")
     assert driving.parts == {

@@ -292,11 +292,7 @@ def test_one_server_runs_each_notebook_in_a_new_kernel_in_its_own_folder(tmp_pat
 
 
 @pytest.mark.slow
-def test_in_the_sandbox_what_a_notebook_leaves_running_is_gone_before_the_next(tmp_path):
-    import shutil
-
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
+def test_in_the_sandbox_what_a_notebook_leaves_running_is_gone_before_the_next(sandbox, tmp_path):
     leave = _notebook(
         ["import subprocess\nchild = subprocess.Popen(['sleep', '600'], start_new_session=True)\n"
          "open('../pid.txt', 'w').write(str(child.pid))\nprint('started')"]

@@ -20,19 +20,12 @@ from autograder.bench import filled_course
 from autograder.course import ROOT
 from autograder.execute import NOT_RUN
 from autograder.grade import grade_class, raised_outside_tests
-from autograder.sandbox import NOBODY, Limits, check_sandbox, sandboxed_command
+from autograder.sandbox import NOBODY, Limits, sandboxed_command
 from duckielib import robot_project
 
 pytestmark = pytest.mark.slow
 
 ASSIGNMENT = "03_frames"
-
-
-@pytest.fixture(scope="module")
-def sandbox():
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
-    check_sandbox()
 
 
 def run_inside(tmp_path: Path, code: str, limits: Optional[Limits] = None):

@@ -26,19 +26,12 @@ from autograder.bench import filled_notebook
 from autograder.cluster import dask_cluster
 from autograder.course import ROOT
 from autograder.grade import grade_class
-from autograder.sandbox import Limits, check_sandbox
+from autograder.sandbox import Limits
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]
 
 ASSIGNMENT = "03_frames"
 LIMITS = Limits(cell_seconds=20, submission_seconds=120)
-
-
-@pytest.fixture(scope="module")
-def sandbox():
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
-    check_sandbox()
 
 
 def _class(folder: Path) -> Path:

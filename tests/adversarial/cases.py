@@ -16,6 +16,24 @@ from typing import Dict, Optional, Tuple
 ASSIGNMENT = "03_frames"
 FULL_MARKS = 9.0
 
+#: A mission node that announces every state in its colour and holds every stop, but sleeps
+#: instead of driving: the robot never leaves its start (exported after the student's own).
+NEVER_DRIVES = """\
+def mission_node(mission):
+    rospy.init_node("mission_node")
+    announce = rospy.Publisher("~state", String, queue_size=10, latch=True)
+    shutdown = rospy.Publisher("shutdown", Empty, queue_size=1)
+    rospy.wait_for_service("light_service_node/set_color", timeout=10.0)
+    set_color = rospy.ServiceProxy("light_service_node/set_color", ChangePattern)
+    for state in mission.states:
+        set_color(String(data=state.color))
+        announce.publish(String(data=state.name))
+        for move in state.moves:
+            rospy.sleep(move.seconds if isinstance(move, Stop) else 2.0)
+    announce.publish(String(data="done"))
+    shutdown.publish(Empty())
+"""
+
 
 @dataclass(frozen=True)
 class Case:

@@ -20,7 +20,7 @@ from cases import ASSIGNMENT, CASES, FULL_MARKS, expected_loss
 from autograder.bench import filled_notebook
 from autograder.course import ROOT
 from autograder.grade import grade_class
-from autograder.sandbox import Limits, check_sandbox
+from autograder.sandbox import Limits
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]
 
@@ -61,10 +61,7 @@ def build(folder, name, case, paths):
 
 
 @pytest.fixture(scope="module")
-def graded(tmp_path_factory):
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
-    check_sandbox()
+def graded(sandbox, tmp_path_factory):
     root = tmp_path_factory.mktemp("adversarial")
     submissions, out = root / "submissions", root / "out"
     # What a submission must not reach: the gradebook and the grader's work, the course

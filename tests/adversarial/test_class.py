@@ -25,31 +25,17 @@ import shutil
 
 import nbformat
 import pytest
+from cases import NEVER_DRIVES
 
 from autograder.bench import filled_course
 from autograder.course import ROOT
 from autograder.grade import grade_class
-from autograder.sandbox import Limits, check_sandbox
+from autograder.sandbox import Limits
 
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(900)]
 
 GRADED = ["03_frames", "11_to_the_robot"]
 
-NEVER_DRIVES = """\
-def mission_node(mission):
-    rospy.init_node("mission_node")
-    announce = rospy.Publisher("~state", String, queue_size=10, latch=True)
-    shutdown = rospy.Publisher("shutdown", Empty, queue_size=1)
-    rospy.wait_for_service("light_service_node/set_color", timeout=10.0)
-    set_color = rospy.ServiceProxy("light_service_node/set_color", ChangePattern)
-    for state in mission.states:
-        set_color(String(data=state.color))
-        announce.publish(String(data=state.name))
-        for move in state.moves:
-            rospy.sleep(move.seconds if isinstance(move, Stop) else 2.0)
-    announce.publish(String(data="done"))
-    shutdown.publish(Empty())
-"""
 
 LINK_FARM = """\
 import os
@@ -71,10 +57,7 @@ def _append(folder, name, source, export=False):
 
 
 @pytest.fixture(scope="module")
-def graded(tmp_path_factory):
-    if shutil.which("bwrap") is None:
-        pytest.skip("bubblewrap is not installed; run `make ros`.")
-    check_sandbox()
+def graded(sandbox, tmp_path_factory):
     root = tmp_path_factory.mktemp("class")
     submissions, out = root / "submissions", root / "out"
     filled = filled_course(root / "filled")
