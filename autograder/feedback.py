@@ -1,9 +1,11 @@
 """Per-student feedback: one self-contained HTML page a student learns from.
 
 For each test of each notebook the page shows the points and, when it failed, the message the
-test gave (the assertion's sentence, or the error's name and text). Hidden tests' code is never
-shown: only their messages, which the instructor wrote for students. The driving part shows
-the mission's score, what went wrong, the states the robot went through and its trajectory.
+test gave (the assertion's sentence, or the error's name and text); for each answer in words,
+the points a person gave in Formgrader and their comment. Hidden tests' code is never shown:
+only their messages, which the instructor wrote for students; nor are the answers' rubrics. The
+driving part shows the mission's score, what went wrong, the states the robot went through and
+its trajectory.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from __future__ import annotations
 import base64
 import html
 from pathlib import Path
-from typing import TYPE_CHECKING, Dict, List
+from typing import TYPE_CHECKING, Dict, List, Optional, Set, Tuple
 
 from autograder.driving import MAX_SCORE, POINTS
 
@@ -19,6 +21,8 @@ if TYPE_CHECKING:  # pragma: no cover - types only
     from autograder.grade import StudentResult
 
 __all__ = ["failure_messages", "write_feedback"]
+
+Key = Tuple[str, str]
 
 #: The longest message shown for one test, in characters.
 MESSAGE_LIMIT = 600
@@ -32,6 +36,7 @@ th, td { text-align: left; padding: 0.3rem 0.6rem; border-bottom: 1px solid #eee
          vertical-align: top; }
 .pass { color: #1a7f37; } .fail { color: #b3261e; }
 pre { white-space: pre-wrap; margin: 0; font-size: 0.9rem; }
+.comment { background: #eef4ff; padding: 0.3rem 0.5rem; border-radius: 4px; }
 .note { background: #fff4e5; padding: 0.5rem 0.8rem; border-radius: 4px; }
 img { max-width: 100%; border: 1px solid #ddd; }
 """
@@ -78,7 +83,7 @@ def _e(value: object) -> str:
     return html.escape(str(value))
 
 
-def _tests_section(result: StudentResult, names: List[str]) -> List[str]:
+def _tests_section(result: StudentResult, names: List[str], answers: Set[Key]) -> List[str]:
     parts: List[str] = []
     for name in names:
         cells = [(key[1], value) for key, value in result.cells.items() if key[0] == name]
@@ -87,20 +92,39 @@ def _tests_section(result: StudentResult, names: List[str]) -> List[str]:
         score = sum(value[0] for _, value in cells)
         most = sum(value[1] for _, value in cells)
         parts.append(f"<h2>{_e(name)}: {score:g} / {most:g}</h2>")
-        parts.append("<table><tr><th>Test</th><th>Points</th><th>Result</th></tr>")
+        parts.append("<table><tr><th>Test or answer</th><th>Points</th><th>Result</th></tr>")
         for grade_id, (got, out_of) in cells:
             message = result.messages.get((name, grade_id))
+            comment = result.comments.get((name, grade_id))
             if (name, grade_id) in result.to_grade:
                 verdict = "your instructor grades this answer"
+            elif (name, grade_id) in answers:
+                verdict = "graded by your instructor"
+                if comment:
+                    verdict += f'<pre class="comment">{_e(comment)}</pre>'
             elif got >= out_of:
                 verdict = '<span class="pass">passed</span>'
             else:
                 shown = message or "Some checks did not pass."
                 verdict = f'<span class="fail">failed</span><pre>{_e(shown)}</pre>'
+            if comment and (name, grade_id) not in answers:
+                verdict += f'<pre class="comment">Your instructor: {_e(comment)}</pre>'
             parts.append(
                 f"<tr><td>{_e(grade_id)}</td><td>{got:g} / {out_of:g}</td><td>{verdict}</td></tr>"
             )
         parts.append("</table>")
+        graded = {grade_id for grade_id, _ in cells}
+        others = [
+            (cell, text)
+            for (assignment, cell), text in sorted(result.comments.items())
+            if assignment == name and cell not in graded
+        ]
+        if others:
+            items = "".join(
+                f'<li><strong>{_e(cell)}</strong>: <pre class="comment">{_e(text)}</pre></li>'
+                for cell, text in others
+            )
+            parts.append(f"<p>Your instructor's comments on your code:</p><ul>{items}</ul>")
     return parts
 
 
@@ -173,13 +197,17 @@ def _driving_section(result: StudentResult) -> List[str]:
     return parts
 
 
-def write_feedback(path: Path, result: StudentResult, names: List[str]) -> Path:
+def write_feedback(
+    path: Path, result: StudentResult, names: List[str], answers: Optional[Set[Key]] = None
+) -> Path:
     """Write the feedback page of one student to ``path``.
 
     Args:
         path: the HTML file to write (its folder must exist).
         result: the student's grading.
         names: the assignments, in course order.
+        answers: the answers in words, graded by a person: ``(assignment, grade_id)``. Their
+            points and the person's comment are shown, never their rubric.
     """
     heading = f"Feedback for {result.student}"
     parts = [
@@ -199,7 +227,7 @@ def write_feedback(path: Path, result: StudentResult, names: List[str]) -> Path:
     if result.problems:
         items = "".join(f"<li>{_e(problem)}</li>" for problem in result.problems)
         parts.append(f'<div class="note"><p>While grading:</p><ul>{items}</ul></div>')
-    parts += _tests_section(result, names)
+    parts += _tests_section(result, names, answers or set())
     parts += _driving_section(result)
     parts.append("</body></html>\n")
     partial = path.with_name(path.name + ".partial")

@@ -2,23 +2,33 @@
 
 ``duckie grade --out grading/`` leaves nbgrader's course tree in ``grading/work/``: the gradebook
 (scores, and the answers in words that wait for a person), the release and the autograded
-notebooks. :func:`prepare` writes the ``nbgrader_config.py`` that tells Formgrader where each
+notebooks. Each answer in words is shown there with its rubric right under it
+(:func:`with_rubrics`: the rubric is the source's solution region of the answer cell, put back
+by ``duckie grade`` into the notebooks Formgrader shows, never into the students' feedback).
+:func:`prepare` writes the ``nbgrader_config.py`` that tells Formgrader where each
 of them is (the hidden tests' source stays where it is, in ``solutions/``), and
 :func:`command` the JupyterLab command line that opens it, with nbgrader's instructor tools and
 without the students' configuration. Grades given there go into the gradebook; the next
-``duckie grade`` reads them into ``grades.csv`` and the feedback pages.
+``duckie grade``, or ``duckie feedback`` at once, reads them, with the comments given there,
+into ``grades.csv`` and the feedback pages.
 """
 
 from __future__ import annotations
 
+import json
 import os
+import re
 import sys
 from pathlib import Path
-from typing import List, Sequence
+from typing import Dict, Iterable, List, Mapping, Sequence, Tuple
 
 from autograder.course import ROOT, CourseError
 
-__all__ = ["command", "prepare"]
+__all__ = ["RUBRIC_TAG", "command", "prepare", "rubrics", "with_rubrics"]
+
+#: The tag of the cell that holds an answer's rubric in the notebooks Formgrader shows.
+RUBRIC_TAG = "rubric"
+_REGION = re.compile(r"### BEGIN SOLUTION\n(.*?)### END SOLUTION", re.S)
 
 _CONFIG = """\
 # Written by `duckie formgrade`: nbgrader's Formgrader on the class graded here.
@@ -64,3 +74,66 @@ def command(work: Path, extra: Sequence[str] = ()) -> List[str]:
     if os.getuid() == 0:
         argv.append("--allow-root")
     return argv + list(extra)
+
+
+def _source_text(cell: Mapping) -> str:
+    text = cell.get("source", "")
+    return "".join(text) if isinstance(text, list) else str(text)
+
+
+def rubrics(source: Path, names: Iterable[str]) -> Dict[Tuple[str, str], str]:
+    """The rubric of each answer in words of ``names``: ``(assignment, grade_id) -> text``.
+
+    An answer in words is a markdown cell that nbgrader grades by hand (``grade`` and
+    ``solution``); its rubric is the text of its solution region in the course source.
+    """
+    found: Dict[Tuple[str, str], str] = {}
+    for name in names:
+        path = Path(source) / name / f"{name}.ipynb"
+        try:
+            notebook = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+        for cell in notebook.get("cells", []):
+            marks = cell.get("metadata", {}).get("nbgrader", {})
+            if cell.get("cell_type") != "markdown" or not (
+                marks.get("grade") and marks.get("solution")
+            ):
+                continue
+            region = _REGION.search(_source_text(cell))
+            if region and region.group(1).strip():
+                found[(name, str(marks.get("grade_id")))] = region.group(1).strip()
+    return found
+
+
+def with_rubrics(text: str, name: str, known: Mapping[Tuple[str, str], str]) -> str:
+    """The notebook ``text`` (JSON) of assignment ``name`` with each answer's rubric after it.
+
+    Cells already tagged :data:`RUBRIC_TAG` are dropped first, so the result is the same
+    however often this runs. Text that is not a notebook is returned as it is.
+    """
+    try:
+        notebook = json.loads(text)
+        cells = list(notebook["cells"])
+    except (ValueError, KeyError, TypeError):
+        return text
+    kept = []
+    for cell in cells:
+        if not isinstance(cell, dict):
+            return text
+        if RUBRIC_TAG in cell.get("metadata", {}).get("tags", []):
+            continue
+        kept.append(cell)
+        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
+        rubric = known.get((name, str(grade_id))) if cell.get("cell_type") == "markdown" else None
+        if rubric is not None:
+            added = {
+                "cell_type": "markdown",
+                "metadata": {"tags": [RUBRIC_TAG]},
+                "source": f"*For the grader, not in the student's notebook:* {rubric}",
+            }
+            if "id" in cell:  # nbformat 4.5 and later: every cell has an id
+                added["id"] = re.sub(r"[^A-Za-z0-9_-]", "-", f"rubric-{grade_id}")[:64]
+            kept.append(added)
+    notebook["cells"] = kept
+    return json.dumps(notebook, indent=1, ensure_ascii=False) + "\n"

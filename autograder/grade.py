@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import functools
 import hashlib
 import io
 import json
@@ -34,13 +35,14 @@ import tarfile
 import tempfile
 import time
 from pathlib import Path, PurePosixPath
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 
 from autograder.cascade import Dependencies
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
 from autograder.driving import MAX_SCORE
 from autograder.feedback import write_feedback
 from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
+from autograder.formgrade import rubrics, with_rubrics
 from autograder.results import StudentResult, from_data, to_data, write_atomic
 from autograder.sandbox import Limits
 from autograder.unit import raised_outside_tests, run_unit
@@ -51,6 +53,7 @@ __all__ = [
     "grade_class",
     "raised_outside_tests",
     "read_submission",
+    "write_grades",
 ]
 
 #: What of a student's folder is never read: hidden files and folders, Python's caches.
@@ -228,6 +231,8 @@ class _Writer:
     db_url: str
     dependencies: Optional[Dependencies] = None
     results: Dict[str, StudentResult] = dataclasses.field(default_factory=dict)
+    #: The rubric of each answer in words, shown under it in the notebooks Formgrader shows.
+    rubrics: Dict[Tuple[str, str], str] = dataclasses.field(default_factory=dict)
 
     def record(self, result: StudentResult, autograded: Dict[str, str], key: str) -> None:
         """Keep one student's result: gradebook, notebooks, feedback, JSON, the class's CSV."""
@@ -238,15 +243,39 @@ class _Writer:
         self._save_grades(result, sorted(autograded))
         for name, text in autograded.items():
             path = self.out / "work" / "autograded" / result.student / name / f"{name}.ipynb"
-            write_atomic(path, text)
-        page = self.out / "feedback" / f"{result.student}.html"
-        with tempfile.TemporaryDirectory(dir=self.out / "feedback") as staging:
-            write_feedback(Path(staging) / page.name, result, self.names)
-            (Path(staging) / page.name).replace(page)
+            write_atomic(path, with_rubrics(text, name, self.rubrics))
+        self.write_feedback(result)
         data = {"key": key, **to_data(result)}
         write_atomic(self.out / "results" / f"{result.student}.json", json.dumps(data, indent=1))
         self.results[result.student] = result
         self.write_csv()
+
+    def write_feedback(self, result: StudentResult) -> None:
+        """The student's feedback page, whole or not at all."""
+        page = self.out / "feedback" / f"{result.student}.html"
+        page.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory(dir=page.parent) as staging:
+            write_feedback(Path(staging) / page.name, result, self.names, self.answers)
+            (Path(staging) / page.name).replace(page)
+
+    @functools.cached_property
+    def answers(self) -> Set[Tuple[str, str]]:
+        """The answers in words of the graded assignments: cells nbgrader grades by hand."""
+        from nbgrader.api import Gradebook, MissingEntry
+
+        found = set()
+        with Gradebook(self.db_url) as gradebook:
+            for name in self.names:
+                try:
+                    notebooks = gradebook.find_assignment(name).notebooks
+                except MissingEntry:
+                    continue
+                for notebook in notebooks:
+                    written = {cell.name for cell in notebook.solution_cells}
+                    found |= {
+                        (name, cell.name) for cell in notebook.grade_cells if cell.name in written
+                    }
+        return found
 
     def _explain(self, result: StudentResult) -> None:
         """Name first the function a failure builds on, when that function fails its own test."""
@@ -341,10 +370,11 @@ class _Writer:
 
 
 def _people_grades(gradebook: Any, result: StudentResult) -> None:
-    """The grades people gave ``result``'s student, read from an open gradebook into it."""
+    """The grades and comments people gave ``result``'s student, from an open gradebook."""
     from nbgrader.api import MissingEntry
 
     waiting = []
+    comments = {}
     for name in sorted({name for name, _ in result.cells}):
         try:
             submission = gradebook.find_submission(name, result.student)
@@ -359,7 +389,11 @@ def _people_grades(gradebook: Any, result: StudentResult) -> None:
                     result.cells[key] = (float(grade.manual_score), result.cells[key][1])
                 elif grade.auto_score is None:
                     waiting.append(key)
+            for comment in notebook.comments:
+                if (comment.manual_comment or "").strip():
+                    comments[(name, comment.name)] = comment.manual_comment.strip()
     result.to_grade = waiting
+    result.comments = comments
 
 
 def _kept(out: Path, student: str, key: str) -> Optional[StudentResult]:
@@ -461,6 +495,7 @@ def grade_class(
         setup.cells,
         f"sqlite:///{work / 'gradebook.db'}",
         Dependencies.from_source(source),
+        rubrics=rubrics(source, names),
     )
     options = {
         "names": names,
@@ -490,6 +525,51 @@ def grade_class(
     if pending:
         _run(pending, setup, writer, jobs, scheduler, progress, started, len(students))
     return [writer.results[name] for name in sorted(writer.results)]
+
+
+def write_grades(out: Path, source: Path = ROOT / "solutions") -> List[StudentResult]:
+    """Write ``grades.csv`` and the feedback pages again, with what people gave in Formgrader.
+
+    Nothing is graded or run: the results kept in ``out/results/`` are read back, the grades
+    and comments given in the gradebook since (nbgrader's Formgrader, ``duckie formgrade``) are
+    put over them, and every student's feedback page and the class's CSV are written again.
+
+    Args:
+        out: the folder ``duckie grade --out`` wrote.
+        source: the course source (the assignments' order, the answers' rubrics).
+
+    Returns:
+        One result per student, in name order.
+
+    Raises:
+        CourseError: if ``out`` holds no graded class.
+    """
+    out = Path(out).resolve()
+    database = out / "work" / "gradebook.db"
+    kept = sorted((out / "results").glob("*.json")) if (out / "results").is_dir() else []
+    if not database.is_file() or not kept:
+        raise CourseError(
+            f"{out} holds no graded class: grade it first with "
+            f"`duckie grade SUBMISSIONS --out {out}`."
+        )
+    results = []
+    for path in kept:
+        try:
+            results.append(from_data(json.loads(path.read_text(encoding="utf-8"))))
+        except (OSError, ValueError, KeyError, TypeError):
+            raise CourseError(
+                f"{path} cannot be read; run `duckie grade` again to grade that student anew."
+            ) from None
+    graded = {name for result in results for name, _ in result.cells}
+    order = assignments(source)
+    names = [name for name in order if name in graded] + sorted(graded - set(order))
+    writer = _Writer(out, names, {}, f"sqlite:///{database}", rubrics=rubrics(Path(source), names))
+    writer.read_people_grades(results)
+    for result in results:
+        writer.results[result.student] = result
+        writer.write_feedback(result)
+    writer.write_csv()
+    return results
 
 
 def _run(

@@ -37,6 +37,9 @@ class StudentResult:
             the next ``duckie grade`` grades this student again.
         to_grade: the graded cells that wait for a person (an answer in words): no automatic
             score, and none given yet in nbgrader's Formgrader. They count 0 until graded.
+        comments: ``(assignment, cell) -> text``: what a person wrote in nbgrader's
+            Formgrader about a cell (an answer in words, or the code of a graded cell), read
+            from the gradebook at every run.
         timings: where the unit's time went, in seconds: ``notebooks`` (the sandboxed runs,
             kernels' starts included), ``cells`` (the cells themselves), ``nbgrader`` (its
             converters and gradebook), ``driving`` (export and mission), ``unit`` (all).
@@ -50,6 +53,7 @@ class StudentResult:
     seconds: float = 0.0
     complete: bool = True
     to_grade: List[Tuple[str, str]] = field(default_factory=list)
+    comments: Dict[Tuple[str, str], str] = field(default_factory=dict)
     timings: Dict[str, float] = field(default_factory=dict)
 
     @property
@@ -88,6 +92,7 @@ def to_data(result: StudentResult) -> Dict[str, Any]:
         "seconds": result.seconds,
         "complete": result.complete,
         "to_grade": [_key(cell) for cell in result.to_grade],
+        "comments": {_key(key): value for key, value in result.comments.items()},
         "timings": dict(result.timings),
     }
 
@@ -110,6 +115,7 @@ def from_data(data: Dict[str, Any]) -> StudentResult:
         seconds=float(data.get("seconds", 0.0)),
         complete=bool(data.get("complete", True)),
         to_grade=[_pair(str(key)) for key in data.get("to_grade", [])],
+        comments={_pair(key): str(value) for key, value in data.get("comments", {}).items()},
         timings={str(key): float(value) for key, value in data.get("timings", {}).items()},
     )
 

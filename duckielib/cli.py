@@ -288,6 +288,22 @@ def _formgrade(args: argparse.Namespace) -> int:
     return 0  # pragma: no cover - execve does not return
 
 
+def _feedback(args: argparse.Namespace) -> int:
+    import warnings
+    from pathlib import Path
+
+    from autograder.grade import write_grades
+
+    warnings.filterwarnings("ignore", module="nbgrader")
+    results = write_grades(Path(args.out))
+    waiting = sum(len(result.to_grade) for result in results)
+    print(
+        f"wrote {Path(args.out) / 'grades.csv'} and {len(results)} feedback pages in "
+        f"{Path(args.out) / 'feedback'}/; {waiting} answers still wait for a grade."
+    )
+    return 0
+
+
 def _add_grade(commands: argparse._SubParsersAction) -> None:
     """``duckie grade``: autograde a class with nbgrader, each submission in a sandbox."""
     grade = commands.add_parser(
@@ -329,6 +345,13 @@ def _add_grade(commands: argparse._SubParsersAction) -> None:
         "lab_args", nargs="*", help="more JupyterLab options, after -- (-- --port=8890)"
     )
     formgrade.set_defaults(handler=_formgrade)
+    feedback = commands.add_parser(
+        "feedback",
+        help="write grades.csv and the feedback pages again, with the grades and comments "
+        "given in Formgrader (runs nothing)",
+    )
+    feedback.add_argument("out", help="the folder `duckie grade --out` wrote")
+    feedback.set_defaults(handler=_feedback)
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -105,7 +105,8 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
     shutil.copytree(ROOT / "solutions" / ASSIGNMENT, source / ASSIGNMENT)
     path = source / ASSIGNMENT / f"{ASSIGNMENT}.ipynb"
     notebook = nbformat.read(path, as_version=4)
-    notebook.cells.append(_answer_cell("A full answer names the rotation by theta."))
+    rubric = "**Rubric (2 points).** A full answer names the rotation by theta."
+    notebook.cells.append(_answer_cell(f"### BEGIN SOLUTION\n{rubric}\n### END SOLUTION"))
     nbformat.write(notebook, path)
     student = filled_notebook(ASSIGNMENT)
     student.cells.append(_answer_cell("The robot frame turns with theta, so I rotate by it."))
@@ -138,13 +139,30 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
         assert (submitted["student"], submitted["needs_manual_grade"]) == ("ada", True)
         page = ask("GET", f"submissions/{submitted['id']}/?index=0", as_json=False)
         assert "The robot frame turns with theta, so I rotate by it." in page
+        assert "A full answer names the rotation by theta." in page  # the rubric, beside it
         grades = ask("GET", f"api/grades?submission_id={submitted['id']}")
         (answer,) = [grade for grade in grades if grade["name"] == ANSWER]
         given = ask("PUT", f"api/grade/{answer['id']}", {"manual_score": 1.5})
         assert given["manual_score"] == 1.5
+        comments = ask("GET", f"api/comments?submission_id={submitted['id']}")
+        (comment,) = [item for item in comments if item["name"] == ANSWER]
+        said = "Good: name which way theta turns the frame."
+        ask("PUT", f"api/comment/{comment['id']}", {"manual_comment": said})
+
+    # `duckie feedback` folds the grade and the comment in at once, running nothing.
+    command = [sys.executable, "-m", "duckielib.cli", "feedback", str(out)]
+    folded = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+    assert folded.returncode == 0, folded.stderr
+    assert "0 answers still wait for a grade" in folded.stdout
+    row = _rows(out)["ada"]
+    assert (row["to_grade"], row[f"{ASSIGNMENT}:{ANSWER}"], row["total"]) == ("0", "1.5", "10.5")
+    page = (out / "feedback" / "ada.html").read_text()
+    assert "graded by your instructor" in page and said in page
+    assert "A full answer names" not in page  # the rubric stays with the instructor
 
     (again,) = grade_class(tmp_path / "submissions", out, **options)
     assert again.to_grade == []
+    assert again.comments == {(ASSIGNMENT, ANSWER): said}
     row = _rows(out)["ada"]
     assert (row["to_grade"], row[f"{ASSIGNMENT}:{ANSWER}"], row["total"]) == ("0", "1.5", "10.5")
 
@@ -158,6 +176,16 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
         assert grade.manual_score == 1.5
         assert grade.needs_manual_grade  # nbgrader's rule: a person's grade is to be reviewed
     assert _rows(out)["ada"][f"{ASSIGNMENT}:{ANSWER}"] == "1.5"
+
+
+def test_duckie_feedback_refuses_a_folder_that_was_never_graded(tmp_path):
+    command = [sys.executable, "-m", "duckielib.cli", "feedback", str(tmp_path / "grading")]
+    result = subprocess.run(command, capture_output=True, text=True, timeout=60, check=False)
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"duckie: {tmp_path / 'grading'} holds no graded class: grade it first with "
+        f"`duckie grade SUBMISSIONS --out {tmp_path / 'grading'}`.\n"
+    )
 
 
 def test_duckie_formgrade_refuses_a_folder_that_was_never_graded(tmp_path):

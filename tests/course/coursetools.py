@@ -53,6 +53,20 @@ def checking_cells(notebook: dict) -> dict:
     }
 
 
+def answer_cells(notebook: dict) -> dict:
+    """The answers in words a person grades (markdown cells), by grade_id."""
+    return {
+        nbgrader(cell)["grade_id"]: cell
+        for cell in notebook["cells"]
+        if nbgrader(cell).get("grade") and nbgrader(cell).get("solution")
+    }
+
+
+def answer_keys() -> set:
+    """Every answer in words of the course, as ``(notebook, grade_id)``."""
+    return {(name, grade_id) for name in NAMES for grade_id in answer_cells(load_solution_nb(name))}
+
+
 def wrong_solutions() -> dict:
     """Every deliberately wrong solution: ``(notebook, grade_id, mistake) -> cell source``."""
     owners: dict = {}

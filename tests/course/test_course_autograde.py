@@ -11,6 +11,7 @@ from __future__ import annotations
 import pytest
 from coursetools import (
     NAMES,
+    answer_keys,
     load,
     notebook_path,
     reference_answers,
@@ -44,8 +45,15 @@ def test_the_reference_code_scores_full_marks_in_every_cell(graded):
     _, scores, _ = graded
     cells = scores["filled"].cells
     assert cells, "no graded cell was found"
-    short = {key: value for key, value in cells.items() if value[0] != value[1]}
+    answers = answer_keys()
+    short = {
+        key: value for key, value in cells.items() if value[0] != value[1] and key not in answers
+    }
     assert not short, f"cells below full marks: {short}"
+    # Answers in words wait for a person: left as released, nbgrader scores them 0 by itself.
+    assert {key: cells[key] for key in answers} == {
+        key: (0.0, cells[key][1]) for key in answers
+    }
     assert {name for name, _ in cells} == set(NAMES)
 
 
