@@ -1,8 +1,10 @@
-"""The driving score: a student's own exported code drives the mission on the virtual Duckiebot.
+"""The driving score: a student's own exported code drives the missions on the virtual Duckiebot.
 
 The cells the student tagged ``export`` are collected from their notebooks (read as text, never
-run here), and ``duckie mission`` runs that solution on the square-then-circle mission inside
-the same sandbox as their notebooks. The grader then copies the run's bag into a folder of its
+run here), and ``duckie mission`` runs that solution on each mission of :data:`MISSIONS` (square
+then circle, the "D", the straight-line task and the rotation task) inside the same sandbox as
+their notebooks, each run a process of its own. Each mission is scored out of 100 on its own,
+and the driving score is their mean. The grader copies each run's bag into a folder of its
 own and scores what the robot did from that copy, with :func:`duckielib.behaviour.mission_report`
 (states, colours, stops) and :func:`autograder.motion.state_motions` (the driving):
 
@@ -14,11 +16,14 @@ what the robot really did in the moving states        60
 =================================================  ======
 
 The 60 points of driving are split evenly over the mission's moving states (square, return and
-circle: 20 each), and each state's points evenly over its checks, measured on the simulator's
-ground truth from the pose at which the state really began (see :mod:`autograder.motion` for
-the tolerances): each turn's angle and direction, each side's length and where it ends; where the
-way back ends and the heading it ends with; the circle's angle and direction, its radius and
-that it ends where it began. A robot that never drives earns none of them.
+circle: 20 each; forward and back of the straight task: 30 each), and each state's points evenly
+over its checks, measured on the simulator's ground truth from the pose at which the state
+really began (see :mod:`autograder.motion` for the tolerances): each turn's angle and direction,
+each side's length and where it ends; where the way back ends and the heading it ends with; the
+circle's angle and direction, its radius and that it ends where it began. A robot that never
+drives earns none of them. Stopping is in the stops' points (after each move the robot must
+stand still through the next wait), ending is in the states' (the mission node must announce
+"done" and return, as a node that exits properly does).
 
 Everything the run wrote is read through :func:`autograder.files.read_regular` and scored
 from the grader's own copy: no link is followed (the run's folder included), and a bag that is a
@@ -44,11 +49,26 @@ import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Any, Dict, List, Optional, Sequence
 
 from autograder.sandbox import Limits, run
 
-__all__ = ["BAG_LIMIT", "MAX_SCORE", "POINTS", "Driving", "drive", "part_points", "score_bag"]
+__all__ = [
+    "BAG_LIMIT",
+    "MAX_SCORE",
+    "MISSIONS",
+    "POINTS",
+    "Driving",
+    "drive",
+    "drive_missions",
+    "driving_score",
+    "part_points",
+    "score_bag",
+]
+
+#: The missions a student's code drives, each scored out of :data:`MAX_SCORE` on its own: the
+#: course's task, its "D" variant, and the straight-line and rotation tasks of Part 2.
+MISSIONS = ("square_then_circle", "d_shape", "straight", "rotation")
 
 #: Points of each part of the driving score; ``"motion"`` is split over the moving states.
 POINTS = {"bag": 5.0, "states": 20.0, "stops": 15.0, "motion": 60.0}
@@ -111,25 +131,36 @@ def part_points(mission: str = "square_then_circle") -> Dict[str, float]:
     return points
 
 
-def drive(
+def driving_score(missions: Dict[str, Driving]) -> float:
+    """The driving score of a student: the mean of their missions' scores, out of 100."""
+    if not missions:
+        return 0.0
+    return round(sum(driving.score for driving in missions.values()) / len(missions), 2)
+
+
+def drive_missions(
     notebooks: Path,
     folder: Path,
     limits: Limits,
     use_sandbox: bool = True,
-    mission: str = "square_then_circle",
-) -> Driving:
-    """Export the student's notebooks, run the mission in a sandbox on ``folder``, score it.
+    missions: Sequence[str] = MISSIONS,
+) -> Dict[str, Driving]:
+    """Export the student's notebooks once, then drive and score each mission in a sandbox.
+
+    Each mission runs in a process and a sandbox of its own, in ``folder/MISSION``, with
+    ``limits.mission_seconds`` of wall time. When one runs out of time, the missions after it
+    are not driven (the same code would most likely hang again): they score zero, saying so.
 
     Args:
         notebooks: the student's folder of assignment notebooks (a copy of ``course/``), or
             a ``.py`` solution made by ``duckie export``.
-        folder: an empty folder the run may write (owned over to the sandbox's user here).
-        limits: the sandbox's limits; the mission has ``limits.mission_seconds`` of wall time.
+        folder: an empty folder the runs may write (owned over to the sandbox's user here).
+        limits: the sandbox's limits.
         use_sandbox: whether to run in the sandbox (off only with ``duckie grade --no-sandbox``).
-        mission: the mission to drive.
+        missions: the missions to drive, in order.
 
     Returns:
-        The driving score with its reasons.
+        Each mission's driving score with its reasons, in the order of ``missions``.
     """
     from duckielib.errors import DuckielibError
     from duckielib.solution import export_solution
@@ -140,16 +171,49 @@ def drive(
         try:
             text = export_solution(notebooks, strict=False).source
         except DuckielibError as error:
-            return Driving(reasons=[f"Your notebooks could not be exported: {error}"])
+            why = f"Your notebooks could not be exported: {error}"
+            return {name: Driving(reasons=[why], out_of=part_points(name)) for name in missions}
     if folder.exists():
         shutil.rmtree(folder)
     folder.mkdir(parents=True)
     (folder / "solution.py").write_text(text, encoding="utf-8")
-    for path in [folder, *folder.rglob("*")]:
-        shutil.chown(path, limits.uid, limits.uid)
+    shutil.chown(folder, limits.uid, limits.uid)
+    shutil.chown(folder / "solution.py", limits.uid, limits.uid)
+    results: Dict[str, Driving] = {}
+    stuck: Optional[str] = None
+    for name in missions:
+        if stuck is not None:
+            results[name] = Driving(
+                out_of=part_points(name),
+                reasons=[
+                    f"Not driven: the {stuck} mission did not end within "
+                    f"{limits.mission_seconds} s of wall time, and the same nodes drive this one."
+                ],
+            )
+            continue
+        results[name] = drive(folder, limits, use_sandbox, name)
+        if results[name].timed_out:
+            stuck = name
+    return results
+
+
+def drive(
+    folder: Path, limits: Limits, use_sandbox: bool = True, mission: str = "square_then_circle"
+) -> Driving:
+    """Run ``mission`` in a sandbox with the solution ``folder/solution.py``; score its bag.
+
+    Args:
+        folder: a folder the sandbox's user may write, holding ``solution.py`` (an export).
+        limits: the sandbox's limits; the mission has ``limits.mission_seconds`` of wall time.
+        use_sandbox: whether to run in the sandbox (off only with ``duckie grade --no-sandbox``).
+        mission: the mission to drive; the run writes ``folder/MISSION/``.
+
+    Returns:
+        The driving score with its reasons.
+    """
     command = [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "solution.py"]
-    command += ["--mission", mission, "--out", "run", "--no-animation"]
-    run_folder = folder / "run"
+    command += ["--mission", mission, "--out", mission, "--no-animation"]
+    run_folder = folder / mission
     try:
         result = run(
             command,
@@ -201,6 +265,9 @@ def _score_unfinished(run: Path, mission: str, why: str) -> Driving:
     if not driving.parts.get("bag"):  # nothing of the mission reached the bag
         return Driving(out_of=out_of, reasons=[why])
     driving.finished = False
+    # Ending is part of the states' points: a node that never returned did not end properly.
+    driving.parts["states"] = 0.0
+    driving.score = round(sum(driving.parts.values()), 2)
     # The report's own sentence about the missing end is said better by the reason.
     driving.reasons = [why, "It is scored from the bag it wrote until then."] + [
         reason for reason in driving.reasons if "never announced" not in reason

@@ -4,8 +4,8 @@ For each test of each notebook the page shows the points and, when it failed, th
 test gave (the assertion's sentence, or the error's name and text); for each answer in words,
 the points a person gave in Formgrader and their comment. Hidden tests' code is never shown:
 only their messages, which the instructor wrote for students; nor are the answers' rubrics. The
-driving part shows the mission's score, what went wrong, the states the robot went through and
-its trajectory.
+driving part shows each mission's score, what went wrong, the states the robot went through
+and its trajectory.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import html
 from pathlib import Path
 from typing import TYPE_CHECKING, Dict, List, Optional, Set, Tuple
 
-from autograder.driving import MAX_SCORE, POINTS
+from autograder.driving import MAX_SCORE, POINTS, Driving
 
 if TYPE_CHECKING:  # pragma: no cover - types only
     from autograder.grade import StudentResult
@@ -128,11 +128,31 @@ def _tests_section(result: StudentResult, names: List[str], answers: Set[Key]) -
     return parts
 
 
-def _driving_section(result: StudentResult) -> List[str]:
-    driving = result.driving
-    if driving is None:
-        return []
-    parts = [f"<h2>Driving the mission: {driving.score:g} / {MAX_SCORE:g}</h2>"]
+#: What each mission is, for the feedback's headings.
+_MISSION_TITLES = {
+    "square_then_circle": "square then circle",
+    "d_shape": "the D",
+    "straight": "the straight-line task (1.25 m forward, then back)",
+    "rotation": "the rotation task (90° clockwise, then back)",
+}
+
+
+def _driving_sections(result: StudentResult) -> List[str]:
+    parts: List[str] = []
+    if result.missions:
+        parts.append(
+            f"<h2>Driving: {result.driving_score:g} / {MAX_SCORE:g}</h2><p>Your exported "
+            "code drove each mission on the virtual Duckiebot; the driving score is the mean of "
+            "the missions' scores.</p>"
+        )
+    for name, driving in result.missions.items():
+        parts += _driving_section(name, driving)
+    return parts
+
+
+def _driving_section(mission: str, driving: Driving) -> List[str]:
+    title = _MISSION_TITLES.get(mission, mission)
+    parts = [f"<h3>Driving {_e(title)}: {driving.score:g} / {MAX_SCORE:g}</h3>"]
     labels = {
         "bag": "a readable bag with the mission's states",
         "states": "the states and LED colours in order, then 'done'",
@@ -217,8 +237,8 @@ def write_feedback(
         f"<h1>{_e(heading)}</h1>",
         f"<p>Tests: <strong>{result.total:g} / {result.max_total:g}</strong> points.",
     ]
-    if result.driving is not None:
-        parts.append(f" Driving: <strong>{result.driving.score:g} / {MAX_SCORE:g}</strong>.")
+    if result.missions:
+        parts.append(f" Driving: <strong>{result.driving_score:g} / {MAX_SCORE:g}</strong>.")
     parts.append(
         "</p><p>Each failed test shows the message it gave. Some tests are hidden: you see "
         "their message, not their code. Run your notebook again, read the message, and "
@@ -228,7 +248,7 @@ def write_feedback(
         items = "".join(f"<li>{_e(problem)}</li>" for problem in result.problems)
         parts.append(f'<div class="note"><p>While grading:</p><ul>{items}</ul></div>')
     parts += _tests_section(result, names, answers or set())
-    parts += _driving_section(result)
+    parts += _driving_sections(result)
     parts.append("</body></html>\n")
     partial = path.with_name(path.name + ".partial")
     partial.write_text("\n".join(parts), encoding="utf-8")

@@ -39,7 +39,7 @@ from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 
 from autograder.cascade import Dependencies
 from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
-from autograder.driving import MAX_SCORE
+from autograder.driving import MAX_SCORE, MISSIONS
 from autograder.feedback import write_feedback
 from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
 from autograder.formgrade import rubrics, with_rubrics
@@ -59,7 +59,7 @@ __all__ = [
 #: What of a student's folder is never read: hidden files and folders, Python's caches.
 _SKIPPED = (".*", "__pycache__", "*.pyc")
 #: Bumped when what a unit computes changes, so results kept from before are graded again.
-GRADER_VERSION = 2
+GRADER_VERSION = 3
 
 
 def find_submissions(folder: Path) -> Tuple[Dict[str, Path], List[str]]:
@@ -288,10 +288,9 @@ class _Writer:
         for cell, message in explained.items():
             if message.strip() != result.messages.get(cell, "").strip():
                 result.messages[cell] = message.strip()
-        driving = result.driving
-        if driving is not None and driving.score < MAX_SCORE:
-            note = self.dependencies.driving_note(failed)
-            if note is not None:
+        note = self.dependencies.driving_note(failed)
+        for driving in result.missions.values():
+            if note is not None and driving.score < MAX_SCORE:
                 driving.reasons.insert(0, note)
 
     def _save_grades(self, result: StudentResult, graded: List[str]) -> None:
@@ -340,24 +339,36 @@ class _Writer:
     def write_csv(self) -> None:
         results = [self.results[name] for name in sorted(self.results)]
         columns = sorted({key for result in results for key in result.cells})
+        driven = [name for name in MISSIONS if any(name in item.missions for item in results)]
         buffer = io.StringIO()
         writer = csv.writer(buffer)
         writer.writerow(
-            ["student", "total", "max_total", "to_grade", "driving_score", "problems"]
-            + ["driving_problems"]
+            ["student", "total", "max_total", "to_grade", "driving_score"]
+            + [f"driving:{name}" for name in driven]
+            + ["problems", "driving_problems"]
             + [f"{assignment}:{grade_id}" for assignment, grade_id in columns]
         )
         for result in results:
-            driving = result.driving
+            score = result.driving_score
             writer.writerow(
                 [
                     result.student,
                     f"{result.total:g}",
                     f"{result.max_total:g}",
                     str(len(result.to_grade)),
-                    "" if driving is None else f"{driving.score:g}",
+                    "" if score is None else f"{score:g}",
+                ]
+                + [
+                    f"{result.missions[name].score:g}" if name in result.missions else ""
+                    for name in driven
+                ]
+                + [
                     " | ".join(result.problems),
-                    "" if driving is None else " | ".join(driving.reasons),
+                    " | ".join(
+                        f"{name}: {reason}"
+                        for name, driving in result.missions.items()
+                        for reason in driving.reasons
+                    ),
                 ]
                 + [
                     f"{result.cells[key][0]:g}"

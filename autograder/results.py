@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple, Union
 
-from autograder.driving import Driving
+from autograder.driving import Driving, driving_score
 
 __all__ = ["StudentResult", "from_data", "to_data", "write_atomic"]
 
@@ -31,7 +31,8 @@ class StudentResult:
         cells: ``(assignment, grade_id) -> (score, max_score)``.
         problems: one sentence each: what went wrong while grading (not failed tests).
         messages: ``(assignment, grade_id) -> message`` of each failed test.
-        driving: the driving score, or None when the mission was not driven.
+        missions: each mission's driving score, by mission name (empty when the missions
+            were not driven); :attr:`driving_score` is their mean.
         seconds: wall-clock seconds spent on this student.
         complete: False when the grading itself stopped (a crash, the grader's time limit):
             the next ``duckie grade`` grades this student again.
@@ -49,7 +50,7 @@ class StudentResult:
     cells: Dict[Tuple[str, str], Tuple[float, float]] = field(default_factory=dict)
     problems: List[str] = field(default_factory=list)
     messages: Dict[Tuple[str, str], str] = field(default_factory=dict)
-    driving: Optional[Driving] = None
+    missions: Dict[str, Driving] = field(default_factory=dict)
     seconds: float = 0.0
     complete: bool = True
     to_grade: List[Tuple[str, str]] = field(default_factory=list)
@@ -60,6 +61,11 @@ class StudentResult:
     def total(self) -> float:
         """The points scored, all assignments together."""
         return sum(score for score, _ in self.cells.values())
+
+    @property
+    def driving_score(self) -> Optional[float]:
+        """The mean of the missions' scores, out of 100, or None when none was driven."""
+        return driving_score(self.missions) if self.missions else None
 
     @property
     def max_total(self) -> float:
@@ -78,17 +84,18 @@ def _pair(key: str) -> Tuple[str, str]:
 
 def to_data(result: StudentResult) -> Dict[str, Any]:
     """``result`` as JSON-ready data."""
-    driving = None
-    if result.driving is not None:
-        driving = dataclasses.asdict(result.driving)
-        figure = driving.get("figure")
-        driving["figure"] = None if figure is None else base64.b64encode(figure).decode("ascii")
+    missions = {}
+    for name, driving in result.missions.items():
+        data = dataclasses.asdict(driving)
+        figure = data.get("figure")
+        data["figure"] = None if figure is None else base64.b64encode(figure).decode("ascii")
+        missions[name] = data
     return {
         "student": result.student,
         "cells": {_key(key): list(value) for key, value in result.cells.items()},
         "problems": list(result.problems),
         "messages": {_key(key): value for key, value in result.messages.items()},
-        "driving": driving,
+        "missions": missions,
         "seconds": result.seconds,
         "complete": result.complete,
         "to_grade": [_key(cell) for cell in result.to_grade],
@@ -99,19 +106,19 @@ def to_data(result: StudentResult) -> Dict[str, Any]:
 
 def from_data(data: Dict[str, Any]) -> StudentResult:
     """The result that :func:`to_data` gave ``data`` for."""
-    driving = data.get("driving")
-    if driving is not None:
-        known = {item.name for item in dataclasses.fields(Driving)}
-        driving = {name: value for name, value in driving.items() if name in known}
-        if driving.get("figure") is not None:
-            driving["figure"] = base64.b64decode(driving["figure"])
-        driving = Driving(**driving)
+    known = {item.name for item in dataclasses.fields(Driving)}
+    missions = {}
+    for name, driving in (data.get("missions") or {}).items():
+        kept = {key: value for key, value in driving.items() if key in known}
+        if kept.get("figure") is not None:
+            kept["figure"] = base64.b64decode(kept["figure"])
+        missions[str(name)] = Driving(**kept)
     return StudentResult(
         student=str(data["student"]),
         cells={_pair(key): (float(v[0]), float(v[1])) for key, v in data["cells"].items()},
         problems=[str(problem) for problem in data.get("problems", [])],
         messages={_pair(key): str(value) for key, value in data.get("messages", {}).items()},
-        driving=driving,
+        missions=missions,
         seconds=float(data.get("seconds", 0.0)),
         complete=bool(data.get("complete", True)),
         to_grade=[_pair(str(key)) for key in data.get("to_grade", [])],

@@ -10,7 +10,7 @@ with what that process wrote back, as plain data.
 Inside, nbgrader works as it does for a class, on a gradebook of this unit's own (a copy of the
 class's, which holds the hidden tests): the student's notebooks are repaired against the release
 (:mod:`autograder.tamper`), autograded with their cells run in the sandbox
-(:mod:`autograder.sandbox`, :mod:`autograder.execute`), and exported to drive the mission
+(:mod:`autograder.sandbox`, :mod:`autograder.execute`), and exported to drive the missions
 (:mod:`autograder.driving`). The grader reads back only what it asked for: the executed notebook
 a sandboxed run prints (bounded), and the mission's files through :mod:`autograder.files`. The
 notebooks it exports are its own repaired copies, in a folder no sandbox sees.
@@ -45,9 +45,11 @@ _EXECUTE = Path(__file__).resolve().parent / "execute.py"
 
 
 def unit_seconds(task: Dict[str, Any]) -> float:
-    """The wall time a student's unit may take: each notebook's limit, the mission's, a margin."""
+    """The wall time a student's unit may take: each notebook's limit, the missions', a margin."""
+    from autograder.driving import MISSIONS
+
     limits = task["limits"]
-    driving = limits["mission_seconds"] if task.get("driving") else 0
+    driving = len(MISSIONS) * limits["mission_seconds"] if task.get("driving") else 0
     return len(task["names"]) * limits["submission_seconds"] + driving + UNIT_MARGIN_S
 
 
@@ -108,7 +110,7 @@ def run_unit(task: Dict[str, Any], files: Dict[str, bytes], course: Path) -> Dic
                     "cells": {},
                     "problems": [f"Grading stopped: {stopped}; run duckie grade again to retry."],
                     "messages": {},
-                    "driving": None,
+                    "missions": {},
                     "complete": False,
                 },
                 "autograded": {},
@@ -436,26 +438,29 @@ class _Unit:
                 messages[(name, grade_id)] = message
         self.server.stop()
         cells, to_grade = _scores(config, self.student, self.names)
-        driving = None
+        missions: Dict[str, Any] = {}
         if self.task.get("driving"):
-            from autograder.driving import Driving, drive
+            from autograder.driving import MISSIONS, Driving, drive_missions, part_points
 
             before = time.monotonic()
             if handed_in:
-                driving = drive(self.export, self.folder / "driving", self.limits, self.use_sandbox)
-                # The grader's folders mean nothing to the student.
-                driving.reasons = [_without(reason, self.folder) for reason in driving.reasons]
-                if driving.timed_out:  # the instructor should know: the limit may be too tight
-                    self.problems.append(
-                        f"Driving: the mission did not end within {self.limits.mission_seconds} s "
-                        "of wall time."
-                    )
-            else:
-                driving = Driving(
-                    reasons=["No notebook was handed in: there was nothing to drive."]
+                missions = drive_missions(
+                    self.export, self.folder / "driving", self.limits, self.use_sandbox
                 )
-            if driving is not None:
-                self.timings["driving"] = time.monotonic() - before
+                for name, driving in missions.items():
+                    # The grader's folders mean nothing to the student.
+                    driving.reasons = [_without(reason, self.folder) for reason in driving.reasons]
+                    if driving.timed_out:  # the instructor should know: the limit may be tight
+                        self.problems.append(
+                            f"Driving: the {name} mission did not end within "
+                            f"{self.limits.mission_seconds} s of wall time."
+                        )
+            else:
+                why = "No notebook was handed in: there was nothing to drive."
+                missions = {
+                    name: Driving(reasons=[why], out_of=part_points(name)) for name in MISSIONS
+                }
+            self.timings["driving"] = time.monotonic() - before
         from autograder.results import StudentResult, to_data
 
         self.timings["unit"] = time.monotonic() - began
@@ -463,7 +468,7 @@ class _Unit:
         return to_data(
             StudentResult(
                 self.student, cells=cells, problems=self.problems, messages=messages,
-                driving=driving, timings=self.timings, to_grade=to_grade,
+                missions=missions, timings=self.timings, to_grade=to_grade,
             )
         )  # fmt: skip
 

@@ -354,15 +354,14 @@ def _add_grade(commands: argparse._SubParsersAction) -> None:
     feedback.set_defaults(handler=_feedback)
 
 
-def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="duckie",
-        description="Tools of the Duckiebot ROS course.",
-    )
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+def _add_mission(commands: argparse._SubParsersAction) -> None:
+    """``duckie mission``: drive a mission on the virtual Duckiebot."""
+    from duckielib.missions import MISSIONS
 
     mission = commands.add_parser(
-        "mission", help="drive a mission (square then circle, or D) on the virtual Duckiebot"
+        "mission",
+        help="drive a mission (square then circle, the D, the straight or the rotation task) on "
+        "the virtual Duckiebot",
     )
     mission.add_argument(
         "--solution",
@@ -371,7 +370,7 @@ def _parser() -> argparse.ArgumentParser:
     mission.add_argument(
         "--mission",
         default="square_then_circle",
-        choices=("square_then_circle", "d_shape"),
+        choices=sorted(MISSIONS),
         help="which mission to drive (default: square_then_circle)",
     )
     mission.add_argument(
@@ -387,6 +386,16 @@ def _parser() -> argparse.ArgumentParser:
         "--no-animation", action="store_true", help="skip mission.gif (a few seconds faster)"
     )
     mission.set_defaults(handler=_mission)
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="duckie",
+        description="Tools of the Duckiebot ROS course.",
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    _add_mission(commands)
 
     export = commands.add_parser(
         "export", help="collect the graded functions of your notebooks into one solution module"

@@ -1,7 +1,8 @@
 """Missions as data: the states of a task, each with its LED colour and its moves.
 
-The multi-state task of the course (spec: "square then circle") and its later "D" variant are
-not two programs but two values of :class:`Mission`. A student's mission node reads a mission
+The multi-state task of the course (spec: "square then circle"), its later "D" variant and the
+two tasks of Part 2 (1.25 m straight and back, a quarter turn clockwise and back) are not four
+programs but four values of :class:`Mission`. A student's mission node reads a mission
 and carries it out state by state; the runner and the grader read the same value to know what
 should have happened (states and colours in order, how long each stop lasts, where the robot
 should end). Adding a mission means writing one more value, not another state machine.
@@ -27,9 +28,11 @@ __all__ = [
     "D_SHAPE",
     "MISSIONS",
     "Mission",
+    "ROTATION",
     "ReturnToStart",
     "Rotate",
     "SQUARE_THEN_CIRCLE",
+    "STRAIGHT",
     "State",
     "Stop",
     "Straight",
@@ -226,8 +229,35 @@ D_SHAPE = Mission(
     description="wait, a D of 1.25 m, wait, return, wait, a clockwise circle",
 )
 
+#: The straight-line task of Part 2: 1.25 m forward along the start heading, then back to the
+#: start, facing the way it started.
+STRAIGHT = Mission(
+    "straight",
+    (
+        _wait(),
+        State("forward", "GREEN", (Straight(_SIDE),)),
+        _wait(),
+        State("back", "BLUE", (ReturnToStart(),)),
+    ),
+    description="wait, 1.25 m forward, wait, back to the start",
+)
+
+#: The rotation task of Part 2: a quarter turn clockwise on the spot, then back.
+ROTATION = Mission(
+    "rotation",
+    (
+        _wait(),
+        State("clockwise", "GREEN", (Rotate(-_QUARTER),)),
+        _wait(),
+        State("back", "BLUE", (Rotate(_QUARTER),)),
+    ),
+    description="wait, a quarter turn clockwise, wait, a quarter turn back",
+)
+
 #: Every mission by name.
-MISSIONS: Dict[str, Mission] = {mission.name: mission for mission in (SQUARE_THEN_CIRCLE, D_SHAPE)}
+MISSIONS: Dict[str, Mission] = {
+    mission.name: mission for mission in (SQUARE_THEN_CIRCLE, D_SHAPE, STRAIGHT, ROTATION)
+}
 
 
 def mission_named(name: str) -> Mission:

@@ -105,7 +105,8 @@ class Prepared:
             "Next, with your robot's name for ROBOT:",
             f"  cd {project}",
             "  dts devel build -f -H ROBOT    # build the image on the robot",
-            "  dts devel run -H ROBOT         # square then circle (-L d-shape for the D)",
+            "  dts devel run -H ROBOT         # square then circle (-L d-shape for the D;",
+            "                                 #   -L straight, -L rotation: the two tasks)",
         ]
         return "\n".join(lines)
 

@@ -104,7 +104,7 @@ class MissionRun:
             f"(seed {self.summary['seed']}), {self.summary['solution']} solution:"
         ]
         for run in report.states:
-            lines.append(f"  {run.name:<8} {run.color:<7} {run.start:6.1f} s to {run.end:6.1f} s")
+            lines.append(f"  {run.name:<9} {run.color:<7} {run.start:6.1f} s to {run.end:6.1f} s")
         lines.append(
             f"total time {report.total_time:.1f} s (simulated), run in {self.wall_s:.2f} s: "
             f"{self.realtime_factor:.0f}x real time"
@@ -349,10 +349,34 @@ def _drive(
             f"Recording the bag failed ({recorder.error}); what reached the disk is in "
             f"{recorder.active_path.name}, which duckie bag repair recovers."
         )
+    return (
+        bot.namespace,
+        simulated,
+        wall,
+        _failure(crash, ended, files, bot.namespace, time_limit, graph),
+    )
+
+
+def _failure(
+    crash: Optional[str],
+    ended: bool,
+    files: Dict[str, Path],
+    namespace: str,
+    time_limit: float,
+    graph: Any,
+) -> Optional[DuckielibError]:
+    """Why the run stopped early, as the error to raise; None when it ended."""
     failure: Optional[DuckielibError] = None
     if crash is not None:
         failure = (SolutionError if crash.startswith("Finish notebook") else MissionError)(
             f"{crash} The run's log is in {files['log']}."
+        )
+    elif not ended and _announced_done(files["bag"], namespace):
+        failure = MissionError(
+            f"The mission node announced '{DONE}' but did not end within {time_limit:.0f} "
+            "simulated seconds: a node must return once its work is done (a loop that never "
+            "stops, or rospy.spin(), keeps it alive). The run's bag and log are in "
+            f"{files['log'].parent}."
         )
     elif not ended:
         last = [record.text for record in graph.log if "state" in record.text][-1:]
@@ -361,7 +385,18 @@ def _drive(
             + (f" (last log: {last[0]})" if last else "")
             + f". The run's bag and log are in {files['log'].parent}."
         )
-    return bot.namespace, simulated, wall, failure
+    return failure
+
+
+def _announced_done(bag: Path, namespace: str) -> bool:
+    """Whether the mission node's last state in the run's bag is ``done``."""
+    from duckielib.bags import Bag
+
+    try:
+        names = [item.message.data for item in Bag(bag).read(namespace + "mission_node/state")]
+    except (DuckielibError, KeyError, ValueError, OSError, AttributeError):
+        return False
+    return bool(names) and names[-1] == DONE
 
 
 def _named_tracks(tracks: List[Any]) -> List[Any]:

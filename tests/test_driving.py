@@ -17,9 +17,10 @@ from autograder.course import ROOT
 from autograder.driving import (
     BAG_LIMIT,
     MAX_SCORE,
+    MISSIONS,
     POINTS,
     _score_unfinished,
-    drive,
+    drive_missions,
     part_points,
     score_bag,
 )
@@ -38,6 +39,11 @@ def reference():
     return export_solution(ROOT / "solutions").source
 
 
+def drive(solution, folder, limits, mission="square_then_circle"):
+    """How ``solution`` (notebooks or an export) drives one mission in the sandbox."""
+    return drive_missions(solution, folder, limits, missions=[mission])[mission]
+
+
 def changed(reference, old, new, path):
     """The reference solution with ``old`` replaced by ``new``, written to ``path``."""
     assert reference.count(old) == 1, old
@@ -52,6 +58,59 @@ def test_the_points_split_the_driving_over_the_moving_states():
         "bag": 5, "states": 20, "stops": 15, "square": 20, "return": 20, "circle": 20,
     }  # fmt: skip
     assert part_points("d_shape")["d"] == 20
+
+
+def test_the_reference_drives_every_graded_mission_for_full_marks(sandbox, tmp_path):
+    missions = drive_missions(ROOT / "solutions", tmp_path / "box", Limits())
+    assert (
+        list(missions)
+        == list(MISSIONS)
+        == ["square_then_circle", "d_shape", "straight", "rotation"]
+    )
+    assert {name: driving.score for name, driving in missions.items()} == dict.fromkeys(
+        MISSIONS, 100
+    )
+    assert missions["straight"].parts == {
+        "bag": 5, "states": 20, "stops": 15, "forward": 30, "back": 30,
+    }  # fmt: skip
+    assert missions["rotation"].parts == {
+        "bag": 5, "states": 20, "stops": 15, "clockwise": 30, "back": 30,
+    }  # fmt: skip
+    assert [(m["state"], m["passed"]) for m in missions["rotation"].summary["motion"]] == [
+        ("clockwise", 1), ("back", 1),
+    ]  # fmt: skip
+    assert sorted(path.name for path in (tmp_path / "box").iterdir()) == sorted(
+        [*MISSIONS, "solution.py"]
+    )
+
+
+def test_a_node_that_never_ends_loses_the_states_points_with_a_sentence(
+    sandbox, tmp_path, reference
+):
+    # Everything done, "done" announced, and then the node spins for ever: it never exits.
+    spins = changed(reference, "shutdown.publish(Empty())", "rospy.spin()", tmp_path / "s.py")
+    driving = drive(spins, tmp_path / "box", Limits(), mission="rotation")
+    assert driving.parts == {
+        "bag": 5, "states": 0, "stops": 15, "clockwise": 30, "back": 30,
+    }  # fmt: skip
+    assert driving.reasons[0] == (
+        "The mission could not run to its end: The mission node announced 'done' but did not "
+        "end within 600 simulated seconds: a node must return once its work is done (a loop "
+        "that never stops, or rospy.spin(), keeps it alive)."
+    )
+
+
+def test_a_mission_that_runs_out_of_wall_time_leaves_the_next_ones_undriven(sandbox, tmp_path):
+    source = export_solution(ROOT / "solutions").source
+    solution = tmp_path / "solution.py"
+    solution.write_text(source + "\n\ndef mission_node(mission):\n    while True:\n        pass\n")
+    missions = drive_missions(solution, tmp_path / "box", Limits(mission_seconds=15))
+    assert missions["square_then_circle"].timed_out
+    assert {name: driving.score for name, driving in missions.items()} == dict.fromkeys(MISSIONS, 0)
+    assert missions["rotation"].reasons == [
+        "Not driven: the square_then_circle mission did not end within 15 s of wall time, and "
+        "the same nodes drive this one."
+    ]
 
 
 def test_the_reference_drives_the_mission_for_full_marks(sandbox, tmp_path):

@@ -18,6 +18,7 @@ import pytest
 
 from autograder.bench import filled_course
 from autograder.course import ROOT
+from autograder.driving import MISSIONS
 from autograder.execute import NOT_RUN
 from autograder.grade import grade_class, raised_outside_tests
 from autograder.sandbox import NOBODY, Limits, sandboxed_command
@@ -179,8 +180,9 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
     assert json.loads((tmp_path / "out" / "skipped.json").read_text()) == []
     # Only 03_frames was handed in: the export lacks the mission's parts, so no driving score.
     assert rows["ada"]["driving_score"] == "0"
+    assert [rows["ada"][f"driving:{name}"] for name in MISSIONS] == ["0"] * 4
     assert rows["ada"]["driving_problems"].startswith(
-        "The mission could not run to its end: Finish notebook"
+        "square_then_circle: The mission could not run to its end: Finish notebook"
     )
     # Feedback: one page each, with the failed tests' messages and never a hidden test's code.
     pages = {name: (tmp_path / "out" / "feedback" / f"{name}.html").read_text() for name in rows}
@@ -295,7 +297,10 @@ def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_probl
     (result,) = grade_class(tmp_path / "submissions", tmp_path / "out", jobs=1)
     assert result.problems == []
     assert result.total == result.max_total > 60
-    assert result.driving.score == 100, result.driving.reasons
+    assert result.driving_score == 100
+    assert {name: driving.score for name, driving in result.missions.items()} == dict.fromkeys(
+        MISSIONS, 100
+    ), {name: driving.reasons for name, driving in result.missions.items()}
 
 
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):
@@ -326,5 +331,8 @@ def test_notebooks_linked_to_the_reference_are_neither_graded_nor_driven(sandbox
         f"{ASSIGNMENT}: {ASSIGNMENT}.ipynb is a symbolic link; it was left out.",
         f"{ASSIGNMENT}: no {ASSIGNMENT}.ipynb in the submission",
     ]
-    assert result.driving.score == 0
-    assert result.driving.reasons == ["No notebook was handed in: there was nothing to drive."]
+    assert result.driving_score == 0
+    nothing = "No notebook was handed in: there was nothing to drive."
+    assert {name: driving.reasons for name, driving in result.missions.items()} == {
+        name: [nothing] for name in MISSIONS
+    }

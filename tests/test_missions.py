@@ -10,7 +10,9 @@ from duckielib.errors import ConfigError
 from duckielib.missions import (
     D_SHAPE,
     MISSIONS,
+    ROTATION,
     SQUARE_THEN_CIRCLE,
+    STRAIGHT,
     TASK_START,
     Arc,
     ReturnToStart,
@@ -76,10 +78,23 @@ def test_the_d_closes_where_it_began_and_stays_on_the_mat():
         assert 0.1 < pose[1] < 2.24, f"{move} leaves the mat"
 
 
+def test_the_two_tasks_of_part_2_are_missions_too():
+    assert STRAIGHT.colors == ROTATION.colors == ("RED", "GREEN", "RED", "BLUE")
+    assert STRAIGHT.states[1].moves == (Straight(1.25),)
+    assert STRAIGHT.states[3].moves == (ReturnToStart(),)
+    assert ROTATION.states[1].moves == (Rotate(-math.pi / 2),), "clockwise first"
+    assert ROTATION.states[3].moves == (Rotate(math.pi / 2),)
+    assert follow(ROTATION.states[1].moves + ROTATION.states[3].moves, ROTATION.start) == (
+        pytest.approx(ROTATION.start)
+    )
+
+
 def test_missions_by_name_and_the_students_stop_colour():
-    assert set(MISSIONS) == {"square_then_circle", "d_shape"}
+    assert set(MISSIONS) == {"square_then_circle", "d_shape", "straight", "rotation"}
     assert mission_named("d_shape") is D_SHAPE
-    with pytest.raises(ConfigError, match="no mission 'square'; choose one of d_shape, square"):
+    with pytest.raises(
+        ConfigError, match="no mission 'square'; choose one of d_shape, rotation, s"
+    ):
         mission_named("square")
     purple = SQUARE_THEN_CIRCLE.with_stop_color("BLUE")
     assert purple.colors == ("BLUE", "GREEN", "BLUE", "BLUE", "BLUE", "YELLOW")

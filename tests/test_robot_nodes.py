@@ -195,7 +195,9 @@ def test_the_launchers_are_the_ones_documented():
     assert [path.name for path in LAUNCHERS] == [
         "d-shape.sh",
         "default.sh",
+        "rotation.sh",
         "square-then-circle.sh",
+        "straight.sh",
     ]
 
 
@@ -232,6 +234,8 @@ def test_launchers_drive_the_documented_missions():
     assert missions["default"]["mission"] == "square_then_circle"
     assert missions["square-then-circle"]["mission"] == "square_then_circle"
     assert missions["d-shape"]["mission"] == "d_shape"
+    assert missions["straight"]["mission"] == "straight"
+    assert missions["rotation"]["mission"] == "rotation"
 
 
 # --- The catkin package ---------------------------------------------------------------------

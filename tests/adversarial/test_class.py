@@ -98,6 +98,10 @@ def graded(sandbox, tmp_path_factory):
     return {result.student: result for result in results}, out
 
 
+def _reasons(result):
+    return {name: driving.reasons for name, driving in result.missions.items()}
+
+
 def _lost(result):
     return sorted(grade_id for (_, grade_id), (score, most) in result.cells.items() if score < most)
 
@@ -107,7 +111,7 @@ def test_the_reference_student_is_graded_as_if_alone(graded):
     reference = results["reference"]
     assert reference.problems == []
     assert reference.total == reference.max_total > 0
-    assert reference.driving.score == 100, reference.driving.reasons
+    assert reference.driving_score == 100, _reasons(reference)
     assert len(results) == 7
 
 
@@ -115,16 +119,17 @@ def test_links_to_the_solutions_made_during_the_run_are_never_read(graded):
     results, _ = graded
     farm = results["link_farm"]
     assert farm.total == 0
-    assert farm.driving.score == 0
-    assert farm.driving.reasons[0].startswith("The mission could not run"), farm.driving.reasons
-    assert "Finish notebook" in farm.driving.reasons[0]
+    assert farm.driving_score == 0
+    for driving in farm.missions.values():
+        assert driving.reasons[0].startswith("The mission could not run"), driving.reasons
+        assert "Finish notebook" in driving.reasons[0]
 
 
 def test_a_fifo_neither_hangs_the_grader_nor_costs_a_point(graded):
     results, _ = graded
     fifo = results["fifo"]
     assert _lost(fifo) == []
-    assert fifo.driving.score == 100
+    assert fifo.driving_score == 100
     assert fifo.problems == ["03_frames: zz_pipe.ipynb is a FIFO; it was left out."]
 
 
@@ -141,21 +146,31 @@ def test_a_robot_that_never_drives_keeps_its_tests_but_loses_the_moves(graded):
     results, _ = graded
     idle = results["never_drives"]
     assert _lost(idle) == []
-    assert idle.driving.score == 40, idle.driving.parts
-    assert any("did not move" in reason for reason in idle.driving.reasons)
+    for driving in idle.missions.values():
+        assert driving.score == 40, driving.parts
+        assert any("did not move" in reason for reason in driving.reasons)
 
 
 def test_code_that_hangs_on_import_is_stopped_and_reported(graded):
     results, _ = graded
     stuck = results["hangs_on_import"]
     assert _lost(stuck) == []
-    assert stuck.driving.score == 0
-    assert stuck.driving.reasons == ["The mission did not end within 40 s of wall time."]
+    assert stuck.driving_score == 0
+    first, *others = stuck.missions.values()
+    assert first.reasons == ["The mission did not end within 40 s of wall time."]
+    assert [driving.reasons for driving in others] == [
+        [
+            "Not driven: the square_then_circle mission did not end within 40 s of wall time, "
+            "and the same nodes drive this one."
+        ]
+    ] * 3
     # Notebook 11 loads the student's solution too: its cells that import it run out of time.
     timeouts, driving = stuck.problems
     assert timeouts.startswith("11_to_the_robot: 5 cells outside the tests raised: cell 4 (mine")
     assert "CellTimeoutError: still running after the 30 s a cell may take" in timeouts
-    assert driving == "Driving: the mission did not end within 40 s of wall time."
+    assert (
+        driving == "Driving: the square_then_circle mission did not end within 40 s of wall time."
+    )
 
 
 def test_a_huge_print_is_cut_in_the_stored_notebook_and_said(graded):

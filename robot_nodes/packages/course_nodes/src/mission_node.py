@@ -6,9 +6,9 @@ It reads the pose from the odometry node, sends speed commands to the robot
 the wheels however the node ends (finished, Ctrl-C, an error in your code, silent encoders).
 The launch file marks it ``required``: when the mission ends, every node of the launch ends.
 
-Private parameters (set by ``launch/course.launch``): ``~mission`` (``square_then_circle`` or
-``d_shape``) and ``~stop_color`` (the LED colour of the stops, ``RED`` by default); the launch
-file also passes them as ``--mission`` and ``--stop-color``.
+Private parameters (set by ``launch/course.launch``): ``~mission`` (``square_then_circle``,
+``d_shape``, ``straight`` or ``rotation``) and ``~stop_color`` (the LED colour of the stops,
+``RED`` by default); the launch file also passes them as ``--mission`` and ``--stop-color``.
 
 ``roslaunch`` starts it; the code is ``duckielib.robot.mission_main``, and your solution is
 the file ``DUCKIE_SOLUTION`` names.
