@@ -8,10 +8,13 @@ packages first. On a laptop without them, those tests are skipped with the reaso
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import pytest
 
 _IN_CI = os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
+#: Debian's Chromium, which the browser tests drive (Playwright's own download is not used).
+CHROMIUM = Path("/usr/bin/chromium")
 
 
 @pytest.hookimpl(hookwrapper=True)
@@ -34,3 +37,26 @@ def sandbox():
     if shutil.which("bwrap") is None:
         pytest.skip("bubblewrap is not installed; run `make ros`.")
     check_sandbox()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    """Debian's Chromium, headless, driven by Playwright: the tests that need it skip without it."""
+    if not CHROMIUM.exists():
+        pytest.skip("Chromium is not installed; install it with `make ros`.")
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as driver:
+        chromium = driver.chromium.launch(
+            executable_path=str(CHROMIUM),
+            args=[
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--no-first-run",
+            ],
+        )
+        yield chromium
+        chromium.close()

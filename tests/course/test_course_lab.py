@@ -25,14 +25,12 @@ import nbformat
 import pytest
 from coursetools import NAMES, reference_answers, student_copy
 from playwright.sync_api import TimeoutError as PlaywrightTimeout
-from playwright.sync_api import sync_playwright
 
 from autograder.course import ROOT
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook]
 
 TOKEN = "course-lab-test"
-CHROMIUM = Path("/usr/bin/chromium")
 
 
 def free_port():
@@ -100,26 +98,6 @@ def test_jupyterlab_serves_the_course_without_the_instructor_tools(tmp_path):
         assert "@jupyter/nbgrader:validate-assignment" not in disabled
         with pytest.raises(urllib.error.HTTPError, match="404"):
             get(port, "/formgrader")
-
-
-@pytest.fixture(scope="module")
-def browser():
-    if not CHROMIUM.exists():
-        pytest.skip("Chromium is not installed; install it with `make ros`.")
-    with sync_playwright() as driver:
-        chromium = driver.chromium.launch(
-            executable_path=str(CHROMIUM),
-            args=[
-                "--no-sandbox",
-                "--disable-gpu",
-                "--disable-background-networking",
-                "--disable-component-update",
-                "--disable-sync",
-                "--no-first-run",
-            ],
-        )
-        yield chromium
-        chromium.close()
 
 
 #: The notebook on screen (the others stay in the page, hidden), its prompts and its errors.
