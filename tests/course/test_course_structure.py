@@ -12,6 +12,7 @@ from coursetools import (
     NAMES,
     SOLUTION_REGION,
     SOLUTIONS,
+    answer_cells,
     checking_cells,
     graded_cells,
     load,
@@ -98,6 +99,60 @@ def test_grade_cells_have_points_ids_and_tests(name):
         assert HIDDEN_REGION.search(source(tests[f"test_{grade_id}"])), (
             f"{name}: test_{grade_id} has no hidden tests"
         )
+
+
+#: Every question of the exercise (spec: "Questions every student must be able to answer", and
+#: the bag analysis) and the answer cell that collects it, graded by a person.
+EXERCISE_ANSWERS = {
+    "which topic moves the robot, and how did you find it": (
+        "02_ros_concepts",
+        "answer_find_topic",
+    ),
+    "how did you track the angle travelled": ("06_driving", "answer_angle"),
+    "which speed, and what happens when you raise or lower it": ("06_driving", "answer_speed"),
+    "why do the actual and the desired location differ": ("06_driving", "answer_differ"),
+    "does the program exit properly when done": ("06_driving", "answer_exit"),
+    "the task's time, and the final pose by odometry against the truth": (
+        "09_mission",
+        "answer_final_pose",
+    ),
+    "the final location per odometry, and how close to the real one": (
+        "10_bag_analysis",
+        "answer_bag_final",
+    ),
+    "theta over time: where does it wrap at 2 pi, and why": (
+        "10_bag_analysis",
+        "answer_theta_wrap",
+    ),
+}
+RUBRIC = re.compile(r"^\*\*Rubric \((\d+(?:\.\d+)?) points?\)\.\*\* \S")
+
+
+def test_every_question_of_the_exercise_has_an_answer_cell():
+    for question, (name, grade_id) in EXERCISE_ANSWERS.items():
+        assert grade_id in answer_cells(load_solution_nb(name)), (
+            f"{name} has no answer cell {grade_id} for the question: {question}"
+        )
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_answer_cells_hold_a_rubric_that_never_reaches_the_course(name):
+    released = load(notebook_path(COURSE, name))["cells"]
+    by_id = {nbgrader(cell).get("grade_id"): cell for cell in released if nbgrader(cell)}
+    cells = load_solution_nb(name)["cells"]
+    for index, cell in enumerate(cells):
+        if cell not in answer_cells(load_solution_nb(name)).values():
+            continue
+        grade_id, points = nbgrader(cell)["grade_id"], nbgrader(cell)["points"]
+        assert cell["cell_type"] == "markdown", f"{name}: {grade_id} must be a markdown cell"
+        assert not nbgrader(cell)["locked"], f"{name}: students must be able to write {grade_id}"
+        region = SOLUTION_REGION.fullmatch(source(cell).strip())
+        assert region, f"{name}: {grade_id} must hold only its rubric, in a solution region"
+        rubric = RUBRIC.match(region.group(1))
+        assert rubric, f"{name}: {grade_id}'s rubric must start **Rubric (N points).**"
+        assert float(rubric.group(1)) == points, f"{name}: {grade_id} gives {points} points"
+        assert cells[index - 1]["cell_type"] == "markdown", f"{name}: ask before {grade_id}"
+        assert source(by_id[grade_id]) == "YOUR ANSWER HERE", f"{name}: {grade_id} in course/"
 
 
 def test_all_grade_ids_are_unique_across_the_course():

@@ -59,6 +59,37 @@ def robot_topic(relative_name):
     return f"/{os.environ['VEHICLE_NAME']}{relative_name}"
 """,
     },
+    "move_topic": {
+        "relative name, without the robot's namespace": """def move_topic():
+    return "car_cmd_switch_node/cmd"
+""",
+        "robot name hard-coded": """def move_topic():
+    return "/duckiebot/car_cmd_switch_node/cmd"
+""",
+        "the report of what the wheels did": """def move_topic():
+    return robot_topic("wheels_driver_node/wheels_cmd_executed")
+""",
+        "the kinematics node's velocity report": """def move_topic():
+    return robot_topic("kinematics_node/velocity")
+""",
+        "the emergency stop": """def move_topic():
+    return robot_topic("wheels_driver_node/emergency_stop")
+""",
+        "cmd_vel, a name from other robots": """def move_topic():
+    return robot_topic("cmd_vel")
+""",
+        "the node's name instead of its topic": """def move_topic():
+    return robot_topic("car_cmd_switch_node")
+""",
+        "name built once when the cell runs": """import os
+
+NAME = f"/{os.environ.get('VEHICLE_NAME', 'duckiebot')}/joy_mapper_node/car_cmd"
+
+
+def move_topic():
+    return NAME
+""",
+    },
     "bgr_from_jpeg": {
         "RGB order (channels not reversed)": """import io
 

@@ -158,4 +158,26 @@ class AngleTracker:
         return AngleTracker.total
 """,
     },
+    "sweep_speeds": {
+        "no speed too slow for the wheels": """SWEEP_SPEEDS = (0.05, 0.1, 0.2, 0.3, 0.45, 0.6)
+""",
+        "fewer than four speeds": """SWEEP_SPEEDS = (0.03, 0.2, 0.6)
+""",
+        "one speed repeated": """SWEEP_SPEEDS = (0.03, 0.2, 0.2, 0.6)
+""",
+        "every speed too slow to move the robot": """SWEEP_SPEEDS = (0.01, 0.02, 0.025, 0.03)
+""",
+        "nothing fast": """SWEEP_SPEEDS = (0.02, 0.05, 0.1, 0.15)
+""",
+        "faster than the robot can go": """SWEEP_SPEEDS = (0.03, 0.1, 0.5, 1.0)
+""",
+        "centimetres per second": """SWEEP_SPEEDS = (3, 5, 10, 20, 45)
+""",
+        "zero as the speed too slow": """SWEEP_SPEEDS = (0.0, 0.1, 0.2, 0.4)
+""",
+        "backwards as the speed too slow": """SWEEP_SPEEDS = (-0.2, 0.1, 0.2, 0.4)
+""",
+        "one number, not a tuple": """SWEEP_SPEEDS = 0.2
+""",
+    },
 }

@@ -162,4 +162,17 @@ def pose_error(estimate, truth):
     return spans
 """,
     },
+    "plot_theta": {
+        "ignores the bag it is given": [
+            ("bag = Bag(bag_file)", "bag = Bag(sample_bag('square_then_circle_realistic'))"),
+        ],
+        "plots x instead of theta": [("track.t - t0, track.theta,", "track.t - t0, track.x,")],
+        "times not counted from the bag's start": [
+            ("ax.plot(track.t - t0, track.theta,", "ax.plot(track.t + 1.0, track.theta,")
+        ],
+        "no axis labels": [
+            ('    ax.set_xlabel("t (s)")\n', ""),
+            ('    ax.set_ylabel("θ (rad)")\n', ""),
+        ],
+    },
 }
