@@ -165,3 +165,20 @@ def rows(out: Path) -> dict:
     """``grades.csv`` of ``out``: each student's row, by student."""
     with (out / "grades.csv").open() as handle:
         return {row["student"]: row for row in csv.DictReader(handle)}
+
+
+def check_folded(out: Path, points: str, comment: str) -> str:
+    """Run ``duckie feedback OUT`` and check that the grade and comment given reached
+    ``grades.csv`` and ada's feedback page (never the rubric); return the page."""
+    folded = duckie("feedback", str(out))
+    assert folded.returncode == 0, folded.stderr
+    assert "0 answers still wait for a grade" in folded.stdout
+    row = rows(out)["ada"]
+    total = f"{9 + float(points):g}"
+    assert (row["to_grade"], row[f"{ASSIGNMENT}:{ANSWER}"], row["total"]) == ("0", points, total)
+    page = (out / "feedback" / "ada.html").read_text()
+    assert f"<td>{ANSWER}</td><td>{points} / 2</td>" in page
+    assert f'<pre class="comment">{comment}</pre>' in page
+    assert "A full answer names the rotation by theta." not in page
+    assert "For the grader" not in page
+    return page

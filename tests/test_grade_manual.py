@@ -11,7 +11,16 @@ from __future__ import annotations
 
 import nbformat
 import pytest
-from formgrading import ANSWER, ASSIGNMENT, WRITTEN, duckie, formgrader, rows, small_class
+from formgrading import (
+    ANSWER,
+    ASSIGNMENT,
+    WRITTEN,
+    check_folded,
+    duckie,
+    formgrader,
+    rows,
+    small_class,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -54,15 +63,7 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
         server.ask("PUT", f"api/comment/{comment['id']}", {"manual_comment": said})
 
     # `duckie feedback` folds the grade and the comment in at once, running nothing.
-    folded = duckie("feedback", str(out))
-    assert folded.returncode == 0, folded.stderr
-    assert "0 answers still wait for a grade" in folded.stdout
-    row = rows(out)["ada"]
-    assert (row["to_grade"], row[f"{ASSIGNMENT}:{ANSWER}"], row["total"]) == ("0", "1.5", "10.5")
-    page = (out / "feedback" / "ada.html").read_text()
-    assert "graded by your instructor" in page
-    assert said in page
-    assert "A full answer names" not in page  # the rubric stays with the instructor
+    assert "graded by your instructor" in check_folded(out, "1.5", said)
 
     (again,) = course.grade(out)
     assert again.to_grade == []
@@ -82,19 +83,17 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
     assert rows(out)["ada"][f"{ASSIGNMENT}:{ANSWER}"] == "1.5"
 
 
-def test_duckie_feedback_refuses_a_folder_that_was_never_graded(tmp_path):
-    result = duckie("feedback", str(tmp_path / "grading"))
+@pytest.mark.parametrize(
+    ("command", "said"),
+    [
+        ("feedback", "holds no graded class: grade it first with"),
+        ("formgrade", "has no gradebook: grade the class first with"),
+    ],
+)
+def test_the_instructors_commands_refuse_a_folder_that_was_never_graded(tmp_path, command, said):
+    result = duckie(command, str(tmp_path / "grading"))
     assert result.returncode == 1
     assert result.stderr == (
-        f"duckie: {tmp_path / 'grading'} holds no graded class: grade it first with "
-        f"`duckie grade SUBMISSIONS --out {tmp_path / 'grading'}`.\n"
-    )
-
-
-def test_duckie_formgrade_refuses_a_folder_that_was_never_graded(tmp_path):
-    result = duckie("formgrade", str(tmp_path / "grading"))
-    assert result.returncode == 1
-    assert result.stderr == (
-        f"duckie: {tmp_path / 'grading'} has no gradebook: grade the class first with "
+        f"duckie: {tmp_path / 'grading'} {said} "
         f"`duckie grade SUBMISSIONS --out {tmp_path / 'grading'}`.\n"
     )
