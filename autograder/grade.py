@@ -407,6 +407,17 @@ def _people_grades(gradebook: Any, result: StudentResult) -> None:
     result.comments = comments
 
 
+def _keep_submitted(work: Path, student: str, files: Dict[str, bytes], names: List[str]) -> None:
+    """The student's handed-in notebooks, as bytes, in nbgrader's ``submitted/`` tree.
+
+    Formgrader counts a class's submissions there; the grader itself never reads them back.
+    """
+    for name in names:
+        data = files.get(f"{name}/{name}.ipynb")
+        if data is not None:
+            write_atomic(work / "submitted" / student / name / f"{name}.ipynb", data)
+
+
 def _kept(out: Path, student: str, key: str) -> Optional[StudentResult]:
     """The result kept from an earlier run for the same files and course, if whole."""
     path = out / "results" / f"{student}.json"
@@ -530,6 +541,7 @@ def grade_class(
             writer.results[student] = kept
             continue
         said = _left_out(collected.left_out, names)
+        _keep_submitted(work, student, collected.files, names)
         pending.append((student, {**options, "student": student}, collected.files, key, said))
     writer.read_people_grades(list(writer.results.values()))  # given since the last run
     writer.write_csv()

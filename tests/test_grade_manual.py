@@ -49,6 +49,8 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
         assert grade.auto_score is None
     with formgrader(out) as server:
         (submitted,) = server.ask("GET", f"api/submitted_notebooks/{ASSIGNMENT}/{ASSIGNMENT}")
+        listed = {item["name"]: item for item in server.ask("GET", "api/assignments")}
+        assert listed[ASSIGNMENT]["num_submissions"] == 1  # as its Manage Assignments page says
         assert (submitted["student"], submitted["needs_manual_grade"]) == ("ada", True)
         page = server.ask("GET", f"submissions/{submitted['id']}/?index=0", as_json=False)
         assert WRITTEN in page

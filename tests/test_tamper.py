@@ -347,3 +347,32 @@ def test_a_binary_file_is_graded_as_the_release(tmp_path):
     notebook, problems = repair(path, RELEASE)
     assert problems == [NOT_READABLE.format("it is not UTF-8 text")]
     assert notebook == nbformat.read(RELEASE, as_version=4)
+
+
+def test_an_answer_in_words_deleted_or_turned_into_code_is_put_back_as_an_answer(tmp_path):
+    # Notebook 10 has two answers in words: one deleted, one turned into a code cell.
+    release = ROOT / "course" / "10_bag_analysis" / "10_bag_analysis.ipynb"
+    notebook = nbformat.read(release, as_version=4)
+    ids = [cell.metadata.get("nbgrader", {}).get("grade_id") for cell in notebook.cells]
+    del notebook.cells[ids.index("answer_bag_final")]
+    index = ids.index("answer_theta_wrap") - 1
+    typed = "The heading wraps when the robot faces east."
+    notebook.cells[index] = nbformat.v4.new_code_cell(
+        typed, metadata=notebook.cells[index].metadata, id=notebook.cells[index].id
+    )
+    nbformat.write(notebook, tmp_path / "10_bag_analysis.ipynb")
+    fixed, problems = repair(tmp_path / "10_bag_analysis.ipynb", release)
+    assert problems == [
+        "10_bag_analysis: the answer cell answer_bag_final was deleted; the released cell was "
+        "put back, so it scores as unanswered."
+    ]
+    answers = {
+        cell.metadata.nbgrader["grade_id"]: cell
+        for cell in fixed.cells
+        if cell.metadata.get("nbgrader", {}).get("grade_id", "").startswith("answer_")
+    }
+    assert answers["answer_bag_final"].source == "YOUR ANSWER HERE"
+    assert (answers["answer_theta_wrap"].cell_type, answers["answer_theta_wrap"].source) == (
+        "markdown",
+        typed,
+    )
