@@ -23,6 +23,7 @@ TEST_DELTA_PHI = ("05_odometry", "test_delta_phi")
 TEST_WHEEL_PAIRING = ("05_odometry", "test_WheelPairing")
 TEST_ANGLE_ERROR = ("06_driving", "test_angle_error")
 TEST_ANGLE_TRACKER = ("06_driving", "test_AngleTracker")
+TEST_ERROR_PARTS = ("06_driving", "test_error_parts")
 TEST_MISSION_NODE = ("09_mission", "test_mission_node")
 TEST_MISSION_CLOSURE = ("09_mission", "test_mission_closure")
 
@@ -54,7 +55,7 @@ def course() -> Dependencies:
 
 
 def test_every_graded_function_of_the_course_has_its_own_test(course):
-    assert len(course.functions) == 28  # 26, and move_topic (02) and plot_theta (10)
+    assert len(course.functions) == 29  # 26, move_topic (02), error_parts (06), plot_theta (10)
     assert set(course.functions) == set(course.own_tests)
     assert course.own_tests[DELTA_PHI] == (TEST_DELTA_PHI,)
     assert course.own_tests[WHEEL_PAIRING] == (TEST_WHEEL_PAIRING,)
@@ -79,6 +80,7 @@ def test_wheel_pairing_s_test_builds_on_delta_phi(course):
     assert course.own_functions(TEST_WHEEL_PAIRING) == {WHEEL_PAIRING}
     assert course.builds_on(TEST_WHEEL_PAIRING) == {DELTA_PHI}
     assert course.builds_on(TEST_ANGLE_TRACKER) == {ANGLE_ERROR}
+    assert course.builds_on(TEST_ERROR_PARTS) == {Function("06_driving", "distance_along")}
 
 
 def test_the_mission_tests_build_on_every_part_the_mission_loads(course):
@@ -94,7 +96,8 @@ def test_the_other_tests_of_05_to_08_build_on_nothing_else(course):
     lonely = [
         test
         for test in course.tests
-        if "05" <= test[0] < "09" and test not in (TEST_WHEEL_PAIRING, TEST_ANGLE_TRACKER)
+        if "05" <= test[0] < "09"
+        and test not in (TEST_WHEEL_PAIRING, TEST_ANGLE_TRACKER, TEST_ERROR_PARTS)
     ]
     assert len(lonely) == 8
     assert all(course.builds_on(test) == frozenset() for test in lonely)

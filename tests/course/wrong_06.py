@@ -180,4 +180,35 @@ class AngleTracker:
         "one number, not a tuple": """SWEEP_SPEEDS = 0.2
 """,
     },
+    "error_parts": {
+        "late measured the other way": [
+            ("late = said_at_stop - goal", "late = goal - said_at_stop"),
+        ],
+        "coast measured from the start": [
+            ("coast = said_at_end - said_at_stop", "coast = said_at_end"),
+        ],
+        "truth minus odometry": [
+            (
+                "wrong = said_at_end - distance_along(start, truth)",
+                "wrong = distance_along(start, truth) - said_at_end",
+            ),
+        ],
+        "straight-line distances, not along the heading": [
+            (
+                "said_at_stop = distance_along(start, at_stop)",
+                "said_at_stop = math.dist(start[:2], at_stop[:2])",
+            ),
+            (
+                "said_at_end = distance_along(start, at_end)",
+                "said_at_end = math.dist(start[:2], at_end[:2])",
+            ),
+            (
+                "wrong = said_at_end - distance_along(start, truth)",
+                "wrong = said_at_end - math.dist(start[:2], truth[:2])",
+            ),
+        ],
+        "centimetres": [
+            ("return late, coast, wrong", "return 100 * late, 100 * coast, 100 * wrong")
+        ],
+    },
 }
