@@ -19,7 +19,6 @@ import subprocess
 import time
 import urllib.error
 import urllib.request
-from pathlib import Path
 
 import nbformat
 import pytest
@@ -200,3 +199,50 @@ def test_validate_for_students_reports_any_cell_that_raises_not_only_the_tests(t
     (failed,) = Validator(config=config).validate(str(path))["failed"]
     assert failed["source"] == "open_straight[0]"
     assert "NameError" in failed["error"]
+
+
+def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(tmp_path, browser):
+    # The notebooks with answers in words, as a student who finished the code meets them: Run
+    # All shows no error; an answer typed into YOUR ANSWER HERE is saved into its answer cell
+    # and waits for a person when the student is graded.
+    root = tmp_path / "student"
+    student_copy(root / "course", reference_answers())
+    typed = "My odometry ended 3.1 cm and 2 deg from the truth on the realistic robot."
+    with lab(tmp_path, root) as port:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        for name in ("02_ros_concepts", "06_driving", "09_mission", "10_bag_analysis"):
+            run_all_in_the_browser(page, port, name)
+            assert page.locator(STDERR).all_inner_texts() == [], f"cells of {name} showed errors"
+        # Still in 10_bag_analysis: double-click the answer cell, type, render, save.
+        cell = page.locator(f"{SHOWN} .jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
+        cell.scroll_into_view_if_needed()
+        cell.dblclick()
+        editor = cell.locator(".cm-content")
+        editor.click()
+        page.keyboard.press("Control+a")
+        page.keyboard.type(typed)
+        page.keyboard.press("Shift+Enter")
+        page.keyboard.press("Control+s")
+        path = root / "course" / "10_bag_analysis" / "10_bag_analysis.ipynb"
+        deadline = time.monotonic() + 30
+        while typed not in path.read_text():
+            assert time.monotonic() < deadline, "the answer was not saved within 30 s"
+            time.sleep(0.5)
+    (answer,) = [
+        cell
+        for cell in json.loads(path.read_text())["cells"]
+        if cell["metadata"].get("nbgrader", {}).get("grade_id") == "answer_bag_final"
+    ]
+    assert (answer["cell_type"], "".join(answer["source"])) == ("markdown", typed)
+
+    from autograder.grade import grade_class
+    from autograder.sandbox import Limits
+
+    submissions = tmp_path / "submissions"
+    shutil.copytree(root / "course", submissions / "ada")
+    names = ["10_bag_analysis"]
+    (result,) = grade_class(
+        submissions, tmp_path / "out", names=names, driving=False, limits=Limits()
+    )
+    assert result.to_grade == [("10_bag_analysis", "answer_bag_final")]
+    assert result.cells[("10_bag_analysis", "answer_theta_wrap")] == (0.0, 2.0)  # unanswered
