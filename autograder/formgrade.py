@@ -3,7 +3,7 @@
 ``duckie grade --out grading/`` leaves nbgrader's course tree in ``grading/work/``: the gradebook
 (scores, and the answers in words that wait for a person), the release and the autograded
 notebooks. Each answer in words is shown there with its rubric right under it
-(:func:`with_rubrics`: the rubric is the source's solution region of the answer cell, put back
+(:func:`for_formgrader`: the rubric is the source's solution region of the answer cell, put back
 by ``duckie grade`` into the notebooks Formgrader shows, never into the students' feedback).
 :func:`prepare` writes the ``nbgrader_config.py`` that tells Formgrader where each
 of them is (the hidden tests' source stays where it is, in ``solutions/``), and
@@ -24,7 +24,7 @@ from typing import Dict, Iterable, List, Mapping, Sequence, Tuple
 
 from autograder.course import ROOT, CourseError
 
-__all__ = ["RUBRIC_TAG", "command", "prepare", "rubrics", "with_rubrics"]
+__all__ = ["RUBRIC_TAG", "command", "for_formgrader", "prepare", "rubrics"]
 
 #: The tag of the cell that holds an answer's rubric in the notebooks Formgrader shows.
 RUBRIC_TAG = "rubric"
@@ -39,6 +39,8 @@ c.CourseDirectory.release_directory = "release"
 c.CourseDirectory.submitted_directory = "submitted"
 c.CourseDirectory.autograded_directory = "autograded"
 c.CourseDirectory.db_url = {db!r}
+# What students wrote is shown as text: no script in an answer or an output runs in this page.
+c.HTMLExporter.sanitize_html = True
 """
 
 
@@ -106,11 +108,15 @@ def rubrics(source: Path, names: Iterable[str]) -> Dict[Tuple[str, str], str]:
     return found
 
 
-def with_rubrics(text: str, name: str, known: Mapping[Tuple[str, str], str]) -> str:
-    """The notebook ``text`` (JSON) of assignment ``name`` with each answer's rubric after it.
+def for_formgrader(text: str, name: str, known: Mapping[Tuple[str, str], str]) -> str:
+    """The autograded notebook ``text`` (JSON) of assignment ``name``, as Formgrader shows it.
 
-    Cells already tagged :data:`RUBRIC_TAG` are dropped first, so the result is the same
-    however often this runs. Text that is not a notebook is returned as it is.
+    Each answer in words gets its rubric in a cell right after it. Every markdown cell's HTML is
+    shown as text (``<`` written ``&lt;``): Formgrader renders markdown unsanitised in the
+    instructor's own JupyterLab, so a tag in a student's answer (``<img onerror=...>``) would
+    run there. Outputs are sanitised by Formgrader's exporter (``nbgrader_config.py`` of
+    :func:`prepare`). Cells already tagged :data:`RUBRIC_TAG` are dropped first, so the result
+    is the same however often this runs. Text that is not a notebook is returned as it is.
     """
     try:
         notebook = json.loads(text)
@@ -124,8 +130,11 @@ def with_rubrics(text: str, name: str, known: Mapping[Tuple[str, str], str]) -> 
         if RUBRIC_TAG in cell.get("metadata", {}).get("tags", []):
             continue
         kept.append(cell)
+        if cell.get("cell_type") != "markdown":
+            continue
+        cell["source"] = _source_text(cell).replace("<", "&lt;")
         grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
-        rubric = known.get((name, str(grade_id))) if cell.get("cell_type") == "markdown" else None
+        rubric = known.get((name, str(grade_id)))
         if rubric is not None:
             added = {
                 "cell_type": "markdown",

@@ -42,7 +42,7 @@ from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, n
 from autograder.driving import MAX_SCORE, MISSIONS
 from autograder.feedback import write_feedback
 from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
-from autograder.formgrade import rubrics, with_rubrics
+from autograder.formgrade import for_formgrader, rubrics
 from autograder.results import StudentResult, from_data, to_data, write_atomic
 from autograder.sandbox import Limits
 from autograder.unit import raised_outside_tests, run_unit
@@ -243,7 +243,7 @@ class _Writer:
         self._save_grades(result, sorted(autograded))
         for name, text in autograded.items():
             path = self.out / "work" / "autograded" / result.student / name / f"{name}.ipynb"
-            write_atomic(path, with_rubrics(text, name, self.rubrics))
+            write_atomic(path, for_formgrader(text, name, self.rubrics))
         self.write_feedback(result)
         data = {"key": key, **to_data(result)}
         write_atomic(self.out / "results" / f"{result.student}.json", json.dumps(data, indent=1))

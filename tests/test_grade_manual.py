@@ -15,6 +15,7 @@ from formgrading import (
     ANSWER,
     ASSIGNMENT,
     WRITTEN,
+    answer_cell,
     check_folded,
     duckie,
     formgrader,
@@ -99,3 +100,30 @@ def test_the_instructors_commands_refuse_a_folder_that_was_never_graded(tmp_path
         f"duckie: {tmp_path / 'grading'} {said} "
         f"`duckie grade SUBMISSIONS --out {tmp_path / 'grading'}`.\n"
     )
+
+
+def test_html_a_student_writes_never_runs_in_formgrader(sandbox, tmp_path):
+    # Formgrader shows students' notebooks inside the instructor's JupyterLab: a tag in an answer
+    # or a script in an output would run there, with the instructor's rights.
+    course = small_class(tmp_path)
+    course.student.cells[-1] = answer_cell('See <img src=x onerror="window.ANSWER_RAN=1">')
+    shown = "display(HTML('<script>window.OUTPUT_RAN=1</script><b>bold</b>'))"
+    course.student.cells.insert(
+        -1,
+        nbformat.v4.new_code_cell(
+            f"from IPython.display import HTML, Javascript, display\n\n{shown}\n"
+            "display(Javascript('window.SCRIPT_RAN=1'))\n"
+        ),
+    )
+    nbformat.write(course.student, course.handed_in)
+    out = tmp_path / "out"
+    course.grade(out)
+    with formgrader(out) as server:
+        (submitted,) = server.ask("GET", f"api/submitted_notebooks/{ASSIGNMENT}/{ASSIGNMENT}")
+        page = server.ask("GET", f"submissions/{submitted['id']}/?index=0", as_json=False)
+    assert 'See &lt;img src=x onerror="window.ANSWER_RAN=1"&gt;' in page  # shown as text
+    assert "<img src=x" not in page
+    assert "<script>window.OUTPUT_RAN" not in page
+    assert "<b>bold</b>" in page  # harmless HTML still shows
+    assert "application/javascript" not in page
+    assert "SCRIPT_RAN=1</script>" not in page
