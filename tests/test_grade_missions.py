@@ -98,38 +98,36 @@ def test_grades_csv_has_a_column_per_mission_and_their_mean(graded):
         assert results[student].problems == []
 
 
-def test_short_sides_lose_the_straight_task_but_not_the_rotation(graded):
-    results, rows = graded
-    scores = _scores(rows, "short_sides")
-    assert scores["rotation"] == 100
-    assert scores["straight"] < 100
-    assert scores["square_then_circle"] < 100
-    assert scores["d_shape"] < 100
+#: Each mistake: the missions that keep every point, and those that lose some.
+KEPT_AND_LOST = {
+    "short_sides": ({"rotation"}, {"straight", "square_then_circle", "d_shape"}),
+    "wrong_turns": ({"straight"}, {"rotation", "square_then_circle", "d_shape"}),
+    "left_arcs": ({"straight", "rotation"}, {"square_then_circle", "d_shape"}),
+}
+
+
+@pytest.mark.parametrize("student", list(KEPT_AND_LOST))
+def test_each_mistake_loses_points_only_in_the_missions_it_spoils(graded, student):
+    _, rows = graded
+    kept, lost = KEPT_AND_LOST[student]
+    scores = _scores(rows, student)
+    assert {name for name, score in scores.items() if score == 100} == kept, scores
+    assert {name for name, score in scores.items() if score < 100} == lost, scores
+
+
+def test_each_mistake_is_measured_where_it_happens(graded):
+    results, _ = graded
     forward = results["short_sides"].missions["straight"]
     assert forward.parts["forward"] == 0, forward.parts
     (check,) = forward.summary["motion"][0]["checks"]
     assert check["measured"] == pytest.approx(1.0, abs=0.03), check
-
-
-def test_wrong_turns_lose_the_rotation_task_but_not_the_straight_one(graded):
-    results, rows = graded
-    scores = _scores(rows, "wrong_turns")
-    assert scores["straight"] == 100
-    assert scores["rotation"] < 100
-    assert scores["square_then_circle"] < 100
-    assert scores["d_shape"] < 100
     rotation = results["wrong_turns"].missions["rotation"]
     assert rotation.parts["clockwise"] == 0, rotation.parts
     assert any("clockwise" in reason for reason in rotation.reasons), rotation.reasons
-
-
-def test_left_arcs_lose_the_circle_and_the_d_but_neither_task(graded):
-    results, rows = graded
-    scores = _scores(rows, "left_arcs")
-    assert scores["straight"] == scores["rotation"] == 100
-    assert results["left_arcs"].missions["square_then_circle"].parts["circle"] < 20
-    assert results["left_arcs"].missions["square_then_circle"].parts["square"] == 20
-    assert results["left_arcs"].missions["d_shape"].parts["d"] < 20
+    arcs = results["left_arcs"].missions
+    assert arcs["square_then_circle"].parts["circle"] < 20
+    assert arcs["square_then_circle"].parts["square"] == 20
+    assert arcs["d_shape"].parts["d"] < 20
 
 
 def test_a_node_that_never_ends_loses_only_the_states_points_of_every_mission(graded):
