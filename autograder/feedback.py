@@ -99,7 +99,7 @@ def _tests_section(result: StudentResult, names: List[str], answers: Set[Key]) -
             if (name, grade_id) in result.to_grade:
                 verdict = "your instructor grades this answer"
             elif (name, grade_id) in answers:
-                verdict = "graded by your instructor"
+                verdict = _e(message) if message else "graded by your instructor"
                 if comment:
                     verdict += f'<pre class="comment">{_e(comment)}</pre>'
             elif got >= out_of:

@@ -380,6 +380,10 @@ class _Writer:
         write_atomic(self.out / "grades.csv", buffer.getvalue())
 
 
+#: Said of an answer in words left as it was released.
+_UNANSWERED = "No answer was written here, so it scores 0."
+
+
 def _people_grades(gradebook: Any, result: StudentResult) -> None:
     """The grades and comments people gave ``result``'s student, from an open gradebook."""
     from nbgrader.api import MissingEntry
@@ -396,10 +400,15 @@ def _people_grades(gradebook: Any, result: StudentResult) -> None:
                 key = (name, grade.name)
                 if key not in result.cells:
                     continue
+                in_words = grade.cell.cell_type == "markdown"
+                if in_words:
+                    result.messages.pop(key, None)
                 if grade.manual_score is not None:
                     result.cells[key] = (float(grade.manual_score), result.cells[key][1])
                 elif grade.auto_score is None:
                     waiting.append(key)
+                elif in_words:  # nbgrader scores an answer left as released 0 by itself
+                    result.messages[key] = _UNANSWERED
             for comment in notebook.comments:
                 if (comment.manual_comment or "").strip():
                     comments[(name, comment.name)] = comment.manual_comment.strip()

@@ -302,6 +302,10 @@ def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_probl
     assert len(answers) == 8
     assert {value[0] for value in answers.values()} == {0.0}
     assert result.to_grade == []
+    unanswered = "No answer was written here, so it scores 0."
+    assert {result.messages.get(key) for key in answers} == {unanswered}
+    page = (tmp_path / "out" / "feedback" / "ada.html").read_text()
+    assert f"<td>answer_speed</td><td>0 / 2</td><td>{unanswered}</td>" in page
     assert result.total == result.max_total - sum(most for _, most in answers.values()) > 60
     assert result.driving_score == 100
     assert {name: driving.score for name, driving in result.missions.items()} == dict.fromkeys(
