@@ -45,7 +45,20 @@ from nbformat import NotebookNode
 
 from autograder.course import ROOT, CourseError, assignments
 
-__all__ = ["N", "check_full_marks", "filled_course", "filled_notebook", "reference_answers", "run"]
+#: What ``duckie bench`` lists for this benchmark.
+DESCRIPTION = (
+    "grading filled courses: plain nbgrader against the sandboxed grader with 1 and 2 jobs"
+)
+
+__all__ = [
+    "DESCRIPTION",
+    "N",
+    "check_full_marks",
+    "filled_course",
+    "filled_notebook",
+    "reference_answers",
+    "run",
+]
 
 #: How many copies of the filled course each run grades.
 N = int(os.environ.get("DUCKIE_BENCH_GRADE_N", "4"))

@@ -12,7 +12,7 @@ import os
 import signal
 import sys
 import threading
-from typing import Iterator, List, Optional
+from typing import Callable, Iterator, List, Optional
 
 from duckielib.errors import DuckielibError
 
@@ -20,10 +20,10 @@ __all__ = ["main"]
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from duckielib.bench import BENCHMARKS, run_benchmark
+    from duckielib.bench import benchmarks, run_benchmark
 
     if args.name is None:
-        for name, (_, description) in sorted(BENCHMARKS.items()):
+        for name, (_, description) in sorted(benchmarks().items()):
             print(f"{name}: {description}")
         return 0
     for figure, value in run_benchmark(args.name):
@@ -96,25 +96,6 @@ def _bag_repair(args: argparse.Namespace) -> int:
     from duckielib.bags import repair_bag
 
     print(repair_bag(args.broken, args.output, compression=args.compression))
-    return 0
-
-
-def _release(args: argparse.Namespace) -> int:
-    from autograder.course import ROOT, compare_release, release_course
-
-    if args.check:
-        differences = compare_release()
-        if differences:
-            for line in differences:
-                print(line)
-            print("course/ is stale: run 'duckie release' and commit course/.", file=sys.stderr)
-            return 1
-        print("course/ is identical to a fresh release of solutions/.")
-        return 0
-    released = release_course()
-    for path in released:
-        print(f"released {path.relative_to(ROOT)}")
-    print(f"{len(released)} notebooks in course/; commit solutions/ and course/ together.")
     return 0
 
 
@@ -219,141 +200,6 @@ def _add_robot(commands: argparse._SubParsersAction) -> None:
     robot_prepare.set_defaults(handler=_robot_prepare)
 
 
-def _grade(args: argparse.Namespace) -> int:
-    import warnings
-    from pathlib import Path
-
-    from autograder.grade import grade_class
-    from autograder.sandbox import check_sandbox
-
-    # nbgrader's own gradebook code warns about its SQLAlchemy session: nothing to act on.
-    warnings.filterwarnings("ignore", module="nbgrader")
-
-    submissions = Path(args.submissions)
-    if not submissions.is_dir():
-        raise DuckielibError(
-            f"There is no folder {submissions}: give the folder that holds one folder (or "
-            ".zip) per student."
-        )
-    if args.jobs < 1:
-        raise DuckielibError(f"--jobs must be 1 or more, not {args.jobs}.")
-    if args.no_sandbox:
-        print("duckie: grading WITHOUT a sandbox: student code runs with your rights.")
-    else:
-        check_sandbox()
-    try:
-        results = grade_class(
-            submissions,
-            Path(args.out),
-            jobs=args.jobs,
-            use_sandbox=not args.no_sandbox,
-            names=args.assignment or None,
-            progress=lambda line: print(line, flush=True),
-            driving=not args.no_driving,
-            scheduler=args.scheduler,
-        )
-    except KeyboardInterrupt:
-        print(
-            "duckie: interrupted. The students graded so far are in "
-            f"{Path(args.out) / 'grades.csv'}; run the same command again to grade the others.",
-            file=sys.stderr,
-        )
-        return 130
-    troubled = [result for result in results if result.problems]
-    stopped = [result.student for result in results if not result.complete]
-    if stopped:
-        print(
-            f"duckie: the grading of {len(stopped)} students stopped ({', '.join(stopped[:5])}"
-            f"{', ...' if len(stopped) > 5 else ''}); run the same command again to retry them."
-        )
-    print(
-        f"graded {len(results)} students ({len(troubled)} with problems): "
-        f"{Path(args.out) / 'grades.csv'}, feedback pages in {Path(args.out) / 'feedback'}/"
-    )
-    return 0
-
-
-def _formgrade(args: argparse.Namespace) -> int:
-    from pathlib import Path
-
-    from autograder.formgrade import command, prepare
-
-    work = prepare(Path(args.out))
-    argv = command(work, args.lab_args)
-    print(f"duckie: opening nbgrader's Formgrader on {work} (Ctrl-C stops it).", flush=True)
-    # JupyterLab as instructors start it: nbgrader's tools on, the students' settings off.
-    env = {key: value for key, value in os.environ.items() if key != "JUPYTER_CONFIG_PATH"}
-    os.chdir(work)
-    os.execve(argv[0], argv, env)
-    return 0  # pragma: no cover - execve does not return
-
-
-def _feedback(args: argparse.Namespace) -> int:
-    import warnings
-    from pathlib import Path
-
-    from autograder.grade import write_grades
-
-    warnings.filterwarnings("ignore", module="nbgrader")
-    results = write_grades(Path(args.out))
-    waiting = sum(len(result.to_grade) for result in results)
-    print(
-        f"wrote {Path(args.out) / 'grades.csv'} and {len(results)} feedback pages in "
-        f"{Path(args.out) / 'feedback'}/; {waiting} answers still wait for a grade."
-    )
-    return 0
-
-
-def _add_grade(commands: argparse._SubParsersAction) -> None:
-    """``duckie grade``: autograde a class with nbgrader, each submission in a sandbox."""
-    grade = commands.add_parser(
-        "grade", help="autograde a class: nbgrader, a sandbox per submission, in parallel"
-    )
-    grade.add_argument("submissions", help="a folder with one folder (or .zip) per student")
-    grade.add_argument("--out", required=True, help="where grades.csv and the work go")
-    grade.add_argument(
-        "--jobs",
-        type=int,
-        default=1,
-        help="students graded at once on this machine (workers of the local Dask cluster)",
-    )
-    grade.add_argument(
-        "--scheduler",
-        help="grade on a running Dask cluster instead, given its scheduler's address "
-        "(tcp://HOST:8786); its workers need the course's environment and bubblewrap",
-    )
-    grade.add_argument(
-        "--assignment", action="append", help="grade only this assignment (repeatable)"
-    )
-    grade.add_argument(
-        "--no-driving",
-        action="store_true",
-        help="skip the driving score (each student's code driving the mission)",
-    )
-    grade.add_argument(
-        "--no-sandbox",
-        action="store_true",
-        help="run student code without bubblewrap (only where it cannot be installed)",
-    )
-    grade.set_defaults(handler=_grade)
-    formgrade = commands.add_parser(
-        "formgrade",
-        help="grade the answers in words of a graded class in nbgrader's Formgrader (JupyterLab)",
-    )
-    formgrade.add_argument("out", help="the folder `duckie grade --out` wrote")
-    formgrade.add_argument(
-        "lab_args", nargs="*", help="more JupyterLab options, after -- (-- --port=8890)"
-    )
-    formgrade.set_defaults(handler=_formgrade)
-    feedback = commands.add_parser(
-        "feedback",
-        help="write grades.csv and the feedback pages again, with the grades and comments "
-        "given in Formgrader (runs nothing)",
-    )
-    feedback.add_argument("out", help="the folder `duckie grade --out` wrote")
-    feedback.set_defaults(handler=_feedback)
-
-
 def _add_mission(commands: argparse._SubParsersAction) -> None:
     """``duckie mission``: drive a mission on the virtual Duckiebot."""
     from duckielib.missions import MISSIONS
@@ -388,6 +234,17 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
     mission.set_defaults(handler=_mission)
 
 
+def _plugins() -> List[Callable[[argparse._SubParsersAction], None]]:
+    """The functions that add more commands: the entry points of the group ``duckie.commands``.
+
+    The instructors' commands (``release``, ``grade``, ``formgrade``, ``feedback``) come this way
+    from the ``autograder`` package, so the library students receive never imports it.
+    """
+    from importlib.metadata import entry_points
+
+    return [entry.load() for entry in sorted(entry_points(group="duckie.commands"), key=str)]
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="duckie",
@@ -405,14 +262,6 @@ def _parser() -> argparse.ArgumentParser:
     export.set_defaults(handler=_export)
 
     _add_handin(commands)
-
-    release = commands.add_parser(
-        "release", help="regenerate course/ from solutions/ with nbgrader (instructors)"
-    )
-    release.add_argument(
-        "--check", action="store_true", help="only say whether course/ is up to date"
-    )
-    release.set_defaults(handler=_release)
 
     bag = commands.add_parser("bag", help="inspect, plot, replay and repair ROS 1 bags")
     bag_commands = bag.add_subparsers(dest="bag_command", metavar="BAG_COMMAND", required=True)
@@ -466,7 +315,8 @@ def _parser() -> argparse.ArgumentParser:
 
     _add_robot(commands)
 
-    _add_grade(commands)
+    for add_commands in _plugins():
+        add_commands(commands)
     bench = commands.add_parser("bench", help="run a benchmark and print its figures")
     bench.add_argument("name", nargs="?", help="benchmark to run; omit to list them")
     bench.set_defaults(handler=_bench)

@@ -195,3 +195,28 @@ def test_heavy_packages_are_imported_only_at_their_edge():
             if not relative.startswith(EDGES[package]):
                 misplaced.append(f"{relative} imports {package}")
     assert misplaced == []
+
+
+def test_the_library_students_receive_never_reaches_the_grader():
+    # The instructors' commands and benchmark join `duckie` through entry points (pyproject):
+    # no module of duckielib imports autograder, nor names it for importlib.
+    reaching = []
+    for path in sorted((ROOT / "duckielib").rglob("*.py")):
+        if "autograder" in _imported_packages(path) or '"autograder.' in path.read_text():
+            reaching.append(path.relative_to(ROOT).as_posix())
+    assert reaching == []
+
+
+def test_the_instructors_commands_join_duckie_through_entry_points():
+    from importlib.metadata import entry_points
+
+    from duckielib.bench import benchmarks
+
+    (commands,) = entry_points(group="duckie.commands")
+    assert commands.value == "autograder.commands:add_commands"
+    assert benchmarks()["grade"][0] == "autograder.bench"
+    result = subprocess.run(
+        [tool("duckie"), "--help"], capture_output=True, text=True, check=True, timeout=60
+    )
+    for command in ("release", "grade", "formgrade", "feedback"):
+        assert f"    {command} " in result.stdout or f"    {command}\n" in result.stdout

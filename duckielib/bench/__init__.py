@@ -13,9 +13,10 @@ from typing import Dict, List, Tuple
 
 from duckielib.errors import DuckielibError
 
-__all__ = ["BENCHMARKS", "run_benchmark"]
+__all__ = ["BENCHMARKS", "benchmarks", "run_benchmark"]
 
-#: Benchmark name -> (module, one-line description).
+#: Benchmark name -> (module, one-line description): the library's own. :func:`benchmarks`
+#: adds those other packages register (the grader's ``grade``).
 BENCHMARKS: Dict[str, Tuple[str, str]] = {
     "messages": (
         "duckielib.bench.messages",
@@ -37,13 +38,24 @@ BENCHMARKS: Dict[str, Tuple[str, str]] = {
         "duckielib.bench.bags",
         "odometry replayed from a 100,000-message encoder bag, and Debian's rosbag reading it",
     ),
-    "grade": (
-        "autograder.bench",
-        "grading filled courses: plain nbgrader against the sandboxed grader with 1 and 2 jobs",
-    ),
 }
 
 Figure = Tuple[str, str]
+
+
+def benchmarks() -> Dict[str, Tuple[str, str]]:
+    """Every benchmark: the library's, and those of the entry point group ``duckie.benchmarks``.
+
+    A registered benchmark names its module; its one-line description is the module's
+    ``DESCRIPTION``.
+    """
+    from importlib.metadata import entry_points
+
+    found = dict(BENCHMARKS)
+    for entry in entry_points(group="duckie.benchmarks"):
+        module = importlib.import_module(entry.value)
+        found[entry.name] = (entry.value, str(getattr(module, "DESCRIPTION", "")))
+    return found
 
 
 def run_benchmark(name: str) -> List[Figure]:
@@ -52,8 +64,9 @@ def run_benchmark(name: str) -> List[Figure]:
     Raises:
         DuckielibError: if there is no benchmark of that name.
     """
-    if name not in BENCHMARKS:
-        choices = ", ".join(sorted(BENCHMARKS))
+    known = BENCHMARKS if name in BENCHMARKS else benchmarks()
+    if name not in known:
+        choices = ", ".join(sorted(known))
         raise DuckielibError(f"There is no benchmark called {name!r}; choose one of: {choices}.")
-    module = importlib.import_module(BENCHMARKS[name][0])
+    module = importlib.import_module(known[name][0])
     return module.run()

@@ -1,0 +1,180 @@
+"""The instructors' ``duckie`` commands: ``release``, ``grade``, ``formgrade`` and ``feedback``.
+
+``duckie`` finds them through the entry point group ``duckie.commands`` (``pyproject.toml``), so
+``duckielib``, which students receive, never imports ``autograder``; where ``autograder`` is not
+installed, ``duckie`` simply has no instructor commands. Each handler turns its command line into
+a call of this package and prints what a person needs; errors are sentences
+(:class:`duckielib.errors.DuckielibError`), which ``duckie`` prints without a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from duckielib.errors import DuckielibError
+
+__all__ = ["add_commands"]
+
+
+def _release(args: argparse.Namespace) -> int:
+    from autograder.course import ROOT, compare_release, release_course
+
+    if args.check:
+        differences = compare_release()
+        if differences:
+            for line in differences:
+                print(line)
+            print("course/ is stale: run 'duckie release' and commit course/.", file=sys.stderr)
+            return 1
+        print("course/ is identical to a fresh release of solutions/.")
+        return 0
+    released = release_course()
+    for path in released:
+        print(f"released {path.relative_to(ROOT)}")
+    print(f"{len(released)} notebooks in course/; commit solutions/ and course/ together.")
+    return 0
+
+
+def _grade(args: argparse.Namespace) -> int:
+    import warnings
+    from pathlib import Path
+
+    from autograder.grade import grade_class
+    from autograder.sandbox import check_sandbox
+
+    # nbgrader's own gradebook code warns about its SQLAlchemy session: nothing to act on.
+    warnings.filterwarnings("ignore", module="nbgrader")
+
+    submissions = Path(args.submissions)
+    if not submissions.is_dir():
+        raise DuckielibError(
+            f"There is no folder {submissions}: give the folder that holds one folder (or "
+            ".zip) per student."
+        )
+    if args.jobs < 1:
+        raise DuckielibError(f"--jobs must be 1 or more, not {args.jobs}.")
+    if args.no_sandbox:
+        print("duckie: grading WITHOUT a sandbox: student code runs with your rights.")
+    else:
+        check_sandbox()
+    try:
+        results = grade_class(
+            submissions,
+            Path(args.out),
+            jobs=args.jobs,
+            use_sandbox=not args.no_sandbox,
+            names=args.assignment or None,
+            progress=lambda line: print(line, flush=True),
+            driving=not args.no_driving,
+            scheduler=args.scheduler,
+        )
+    except KeyboardInterrupt:
+        print(
+            "duckie: interrupted. The students graded so far are in "
+            f"{Path(args.out) / 'grades.csv'}; run the same command again to grade the others.",
+            file=sys.stderr,
+        )
+        return 130
+    troubled = [result for result in results if result.problems]
+    stopped = [result.student for result in results if not result.complete]
+    if stopped:
+        print(
+            f"duckie: the grading of {len(stopped)} students stopped ({', '.join(stopped[:5])}"
+            f"{', ...' if len(stopped) > 5 else ''}); run the same command again to retry them."
+        )
+    print(
+        f"graded {len(results)} students ({len(troubled)} with problems): "
+        f"{Path(args.out) / 'grades.csv'}, feedback pages in {Path(args.out) / 'feedback'}/"
+    )
+    return 0
+
+
+def _formgrade(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from autograder.formgrade import command, prepare
+
+    work = prepare(Path(args.out))
+    argv = command(work, args.lab_args)
+    print(f"duckie: opening nbgrader's Formgrader on {work} (Ctrl-C stops it).", flush=True)
+    # JupyterLab as instructors start it: nbgrader's tools on, the students' settings off.
+    env = {key: value for key, value in os.environ.items() if key != "JUPYTER_CONFIG_PATH"}
+    os.chdir(work)
+    os.execve(argv[0], argv, env)
+    return 0  # pragma: no cover - execve does not return
+
+
+def _feedback(args: argparse.Namespace) -> int:
+    import warnings
+    from pathlib import Path
+
+    from autograder.grade import write_grades
+
+    warnings.filterwarnings("ignore", module="nbgrader")
+    results = write_grades(Path(args.out))
+    waiting = sum(len(result.to_grade) for result in results)
+    print(
+        f"wrote {Path(args.out) / 'grades.csv'} and {len(results)} feedback pages in "
+        f"{Path(args.out) / 'feedback'}/; {waiting} answers still wait for a grade."
+    )
+    return 0
+
+
+def add_commands(commands: argparse._SubParsersAction) -> None:
+    """Add the instructors' commands to ``duckie``: release, grade, formgrade, feedback."""
+    release = commands.add_parser(
+        "release", help="regenerate course/ from solutions/ with nbgrader (instructors)"
+    )
+    release.add_argument(
+        "--check", action="store_true", help="only say whether course/ is up to date"
+    )
+    release.set_defaults(handler=_release)
+
+    grade = commands.add_parser(
+        "grade", help="autograde a class: nbgrader, a sandbox per submission, in parallel"
+    )
+    grade.add_argument("submissions", help="a folder with one folder (or .zip) per student")
+    grade.add_argument("--out", required=True, help="where grades.csv and the work go")
+    grade.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="students graded at once on this machine (workers of the local Dask cluster)",
+    )
+    grade.add_argument(
+        "--scheduler",
+        help="grade on a running Dask cluster instead, given its scheduler's address "
+        "(tcp://HOST:8786); its workers need the course's environment and bubblewrap",
+    )
+    grade.add_argument(
+        "--assignment", action="append", help="grade only this assignment (repeatable)"
+    )
+    grade.add_argument(
+        "--no-driving",
+        action="store_true",
+        help="skip the driving score (each student's code driving the mission)",
+    )
+    grade.add_argument(
+        "--no-sandbox",
+        action="store_true",
+        help="run student code without bubblewrap (only where it cannot be installed)",
+    )
+    grade.set_defaults(handler=_grade)
+    formgrade = commands.add_parser(
+        "formgrade",
+        help="grade the answers in words of a graded class in nbgrader's Formgrader (JupyterLab)",
+    )
+    formgrade.add_argument("out", help="the folder `duckie grade --out` wrote")
+    formgrade.add_argument(
+        "lab_args", nargs="*", help="more JupyterLab options, after -- (-- --port=8890)"
+    )
+    formgrade.set_defaults(handler=_formgrade)
+    feedback = commands.add_parser(
+        "feedback",
+        help="write grades.csv and the feedback pages again, with the grades and comments "
+        "given in Formgrader (runs nothing)",
+    )
+    feedback.add_argument("out", help="the folder `duckie grade --out` wrote")
+    feedback.set_defaults(handler=_feedback)
