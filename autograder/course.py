@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Dict, Iterable, List, Mapping, Optional, Tuple, Union
 
+from duckielib.config import PROJECT_ROOT
 from duckielib.errors import DuckielibError
 
 __all__ = [
@@ -36,7 +37,7 @@ __all__ = [
 ]
 
 #: The repository: ``solutions/`` and ``course/`` live here.
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = PROJECT_ROOT
 
 #: Files an assignment folder may hold that are never released: what running a notebook or
 #: Jupyter leaves behind. Images a notebook shows belong in the notebook (cell attachments).

@@ -35,6 +35,7 @@ from duckielib.missions import (
     Arc,
     Mission,
     Move,
+    Pose,
     ReturnToStart,
     Rotate,
     Straight,
@@ -70,8 +71,6 @@ RADIUS_TOLERANCE = 0.25
 
 #: An arc that turns less than this (radians) has no radius worth measuring.
 _SHORTEST_ARC_RAD = math.radians(10.0)
-
-Pose = Tuple[float, float, float]
 
 
 # --- What the robot did in each moving state, from the ground truth -------------------------

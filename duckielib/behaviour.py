@@ -22,7 +22,7 @@ import numpy as np
 from duckielib.bags.analysis import PoseTrack, pose_tracks
 from duckielib.bags.io import Bag, PathLike
 from duckielib.leds import PATTERNS
-from duckielib.missions import Mission
+from duckielib.missions import Mission, Pose
 
 __all__ = [
     "CLOSURE_TOLERANCE_M",
@@ -45,8 +45,6 @@ STILL_TOLERANCE_M = 0.01
 
 #: The true end must be this close to the start, in metres.
 CLOSURE_TOLERANCE_M = 0.10
-
-Pose = Tuple[float, float, float]
 
 
 @dataclass

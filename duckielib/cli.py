@@ -246,6 +246,8 @@ def _plugins() -> List[Callable[[argparse._SubParsersAction], None]]:
 
 
 def _parser() -> argparse.ArgumentParser:
+    from duckielib.missions import TASK_START
+
     parser = argparse.ArgumentParser(
         prog="duckie",
         description="Tools of the Duckiebot ROS course.",
@@ -290,7 +292,7 @@ def _parser() -> argparse.ArgumentParser:
         nargs=3,
         type=float,
         metavar=("X", "Y", "THETA"),
-        default=(0.32, 0.32, 1.5707963267948966),
+        default=TASK_START,
         help="the starting pose, in metres and radians (default: 0.32 0.32 pi/2)",
     )
     odometry.add_argument(

@@ -13,11 +13,16 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Dict
 
 from duckielib.errors import ConfigError
 
-__all__ = ["RobotConfig", "DB21", "TILE_SIZE"]
+__all__ = ["RobotConfig", "DB21", "PROJECT_ROOT", "TILE_SIZE"]
+
+#: The course's repository: the folder that holds ``duckielib/``, ``solutions/``, ``course/``
+#: and ``pyproject.toml`` (where the library runs from a checkout).
+PROJECT_ROOT = Path(__file__).resolve().parents[1]
 
 #: Side of a Duckietown foam mat tile, in metres.
 TILE_SIZE = 0.585

@@ -28,6 +28,7 @@ __all__ = [
     "D_SHAPE",
     "MISSIONS",
     "Mission",
+    "Pose",
     "ROTATION",
     "ReturnToStart",
     "Rotate",
@@ -41,8 +42,12 @@ __all__ = [
     "mission_named",
 ]
 
-#: Where the task starts on the mat: (x, y, theta) in metres and radians.
-TASK_START: Tuple[float, float, float] = (0.32, 0.32, math.pi / 2)
+#: A pose in the world frame: (x, y, theta) in metres and radians.
+Pose = Tuple[float, float, float]
+
+#: Where the task starts on the mat: (x, y, theta) in metres and radians. The one definition
+#: of the start pose; the simulator, the odometry, the bag tools and ``duckie`` use it.
+TASK_START: Pose = (0.32, 0.32, math.pi / 2)
 
 
 @dataclass(frozen=True)

@@ -12,15 +12,13 @@ Pure: standard library only, Python 3.8 (deployed to the robot).
 
 from __future__ import annotations
 
-import math
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, Optional, Sequence
 
 from duckielib.config import DB21
+from duckielib.missions import TASK_START, Pose
 from duckielib.solution import SolutionError, call_part, check_part
 
 __all__ = ["Odometry"]
-
-Pose = Tuple[float, float, float]
 
 
 class Odometry:
@@ -48,7 +46,7 @@ class Odometry:
         resolution: int = DB21.resolution,
         radius: float = DB21.radius,
         baseline: float = DB21.baseline,
-        start: Sequence[float] = (0.32, 0.32, math.pi / 2),
+        start: Sequence[float] = TASK_START,
     ) -> None:
         self._estimate_pose = check_part(solution, "estimate_pose")
         pairing_class = check_part(solution, "WheelPairing")

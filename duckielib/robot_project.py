@@ -30,7 +30,7 @@ from typing import List, Optional, Union
 
 import tomllib
 
-import duckielib
+from duckielib.config import PROJECT_ROOT
 from duckielib.errors import DuckielibError
 from duckielib.solution import (
     CONTRACT,
@@ -52,7 +52,7 @@ __all__ = [
 ]
 
 #: The course's repository: the folder that holds ``duckielib/`` and ``pyproject.toml``.
-ROOT = Path(duckielib.__file__).resolve().parents[1]
+ROOT = PROJECT_ROOT
 
 #: The Duckietown project for the robot.
 PROJECT = ROOT / "robot_nodes"

@@ -14,9 +14,10 @@ from __future__ import annotations
 import math
 from numbers import Integral, Real
 
-__all__ = ["Time", "Duration"]
+__all__ = ["NS_PER_S", "Time", "Duration"]
 
-_NS_PER_S = 1_000_000_000
+#: Nanoseconds in a second: ROS times are whole seconds and nanoseconds.
+NS_PER_S = 1_000_000_000
 
 
 class _TimeValue:
@@ -26,10 +27,10 @@ class _TimeValue:
 
     def __init__(self, secs: int | float = 0, nsecs: int = 0) -> None:
         if type(secs) is int and type(nsecs) is int:  # the common case
-            if 0 <= nsecs < _NS_PER_S:
+            if 0 <= nsecs < NS_PER_S:
                 self.secs, self.nsecs = secs, nsecs
             else:
-                self.secs, self.nsecs = divmod(secs * _NS_PER_S + nsecs, _NS_PER_S)
+                self.secs, self.nsecs = divmod(secs * NS_PER_S + nsecs, NS_PER_S)
             return
         if not isinstance(secs, Real) or not isinstance(nsecs, Real):
             raise TypeError(
@@ -40,10 +41,10 @@ class _TimeValue:
             if not math.isfinite(secs):
                 raise ValueError(f"{type(self).__name__} cannot hold {secs} seconds.")
             whole = math.floor(secs)
-            nsecs = int(nsecs) + round((secs - whole) * _NS_PER_S)
+            nsecs = int(nsecs) + round((secs - whole) * NS_PER_S)
             secs = whole
-        total = int(secs) * _NS_PER_S + int(nsecs)
-        self.secs, self.nsecs = divmod(total, _NS_PER_S)
+        total = int(secs) * NS_PER_S + int(nsecs)
+        self.secs, self.nsecs = divmod(total, NS_PER_S)
 
     @classmethod
     def from_sec(cls, seconds: float):
@@ -62,11 +63,11 @@ class _TimeValue:
 
     def to_sec(self) -> float:
         """The value in seconds, as a float."""
-        return self.secs + self.nsecs / _NS_PER_S
+        return self.secs + self.nsecs / NS_PER_S
 
     def to_nsec(self) -> int:
         """The value in integer nanoseconds."""
-        return self.secs * _NS_PER_S + self.nsecs
+        return self.secs * NS_PER_S + self.nsecs
 
     def is_zero(self) -> bool:
         """True for the zero time (an unset header stamp) or the zero duration."""

@@ -471,7 +471,9 @@ def reference_solution_dir() -> Path:
         SolutionError: if this installation has no ``solutions/`` folder (students' copies
             do not): then give a solution explicitly.
     """
-    folder = Path(__file__).resolve().parent.parent / "solutions"
+    from duckielib.config import PROJECT_ROOT
+
+    folder = PROJECT_ROOT / "solutions"
     if not any(folder.glob("*/*.ipynb")):
         raise SolutionError(
             "The course's reference solution is not part of this installation; give your own "

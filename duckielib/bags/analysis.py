@@ -24,6 +24,7 @@ import numpy as np
 from duckielib.bags.io import Bag, PathLike
 from duckielib.config import DB21
 from duckielib.errors import BagError
+from duckielib.missions import TASK_START
 from duckielib.odometry import Odometry
 
 __all__ = [
@@ -333,7 +334,7 @@ def pose_tracks(bag: Union[Bag, PathLike], time_base: str = "auto") -> List[Pose
 def replay_odometry(
     bag: Union[Bag, PathLike],
     solution: Any,
-    start: Sequence[float] = (0.32, 0.32, math.pi / 2),
+    start: Sequence[float] = TASK_START,
     radius: float = DB21.radius,
     baseline: float = DB21.baseline,
     left_topic: Optional[str] = None,

@@ -19,7 +19,7 @@ import struct
 from typing import Any, Callable, Dict, List, Tuple
 
 from duckielib.errors import MessageError
-from duckielib.rostime import Duration, Time
+from duckielib.rostime import NS_PER_S, Duration, Time
 
 __all__ = [
     "FLOAT32_MAX",
@@ -60,12 +60,11 @@ def integer_range(type_name: str) -> Tuple[int, int]:
 
 
 _UINT32 = struct.Struct("<I")
-_NS_PER_S = 1_000_000_000
 
 
 def _time(kind: type, secs: int, nsecs: int) -> Any:
     """A Time or Duration from unpacked fields, normalised only when it needs to be."""
-    if 0 <= nsecs < _NS_PER_S:
+    if 0 <= nsecs < NS_PER_S:
         value = object.__new__(kind)
         value.secs = secs
         value.nsecs = nsecs

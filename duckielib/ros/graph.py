@@ -32,6 +32,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, TextIO, Tuple
 from duckielib.errors import DuckielibError
 from duckielib.ros import names
 from duckielib.ros.exceptions import ROSException, ROSInitException, ROSInterruptException
+from duckielib.rostime import NS_PER_S
 
 try:  # optional, so the module stays pure (standard library only) where it is missing
     import greenlet as _greenlet
@@ -40,7 +41,6 @@ except ImportError:  # pragma: no cover - the course's environment installs it
 
 __all__ = ["Graph", "LogRecord", "NodeCrashed", "default_graph", "DEBUG", "INFO", "WARN", "ERROR"]
 
-NS_PER_S = 1_000_000_000
 DEBUG, INFO, WARN, ERROR, FATAL = 1, 2, 4, 8, 16
 LEVEL_NAMES = {DEBUG: "DEBUG", INFO: "INFO", WARN: "WARN", ERROR: "ERROR", FATAL: "FATAL"}
 #: How many times a node may be resumed after shutdown before the graph gives up on it.

@@ -33,6 +33,7 @@ from duckielib import leds as led_tables
 from duckielib.config import RobotConfig
 from duckielib.errors import ConfigError, SimulationError
 from duckielib.ros.backend import message_classes
+from duckielib.rostime import NS_PER_S
 from duckielib.sim.encoders import EncoderReading
 from duckielib.sim.simulator import Simulator
 
@@ -46,13 +47,12 @@ __all__ = [
     "WheelsDriverNode",
 ]
 
-_NS_PER_S = 1_000_000_000
 _KINEMATICS_PARAMS = ("radius", "baseline", "gain", "trim", "k", "limit", "v_max", "omega_max")
 
 
 def stamp_at(rospy: Any, t_ns: int) -> Any:
     """A ``rospy.Time`` for ``t_ns`` integer nanoseconds (exact, no float rounding)."""
-    return rospy.Time(t_ns // _NS_PER_S, t_ns % _NS_PER_S)
+    return rospy.Time(t_ns // NS_PER_S, t_ns % NS_PER_S)
 
 
 class WheelsDriverNode:
@@ -146,7 +146,7 @@ class WheelEncoderNode:
         """Publish one encoder sample."""
         tick = self.tick
         tick.data = reading.ticks
-        tick.header.stamp = stamp_at(self.rospy, round(reading.time * _NS_PER_S))
+        tick.header.stamp = stamp_at(self.rospy, round(reading.time * NS_PER_S))
         self.pub_tick.publish(tick)
 
 

@@ -28,6 +28,7 @@ import time
 from typing import Any, Callable, Dict, Optional
 
 from duckielib.missions import mission_named
+from duckielib.rostime import NS_PER_S
 from duckielib.sim import drivers
 from duckielib.sim.simulator import Simulator
 
@@ -36,7 +37,6 @@ __all__ = ["PHYSICS_STEP_S", "VirtualDuckiebotNode", "main"]
 #: Simulated seconds between two ``/clock`` messages (and physics updates).
 PHYSICS_STEP_S = 0.01
 _RATE_HZ = 30.0  # ground truth and camera
-_NS_PER_S = 1_000_000_000
 
 
 class _Locked:
@@ -113,13 +113,13 @@ class VirtualDuckiebotNode:
         )
 
     def _publish_clock(self, t_ns: int) -> None:
-        stamp = self.rospy.Time(t_ns // _NS_PER_S, t_ns % _NS_PER_S)
+        stamp = self.rospy.Time(t_ns // NS_PER_S, t_ns % NS_PER_S)
         self._clock_publisher.publish(self._clock(clock=stamp))
 
     def spin(self, until: Optional[Callable[[], bool]] = None) -> None:
         """Advance the simulation, publishing as the robot does, until rospy shuts down."""
-        step_ns = round(PHYSICS_STEP_S * _NS_PER_S)
-        period_ns = round(_NS_PER_S / _RATE_HZ)
+        step_ns = round(PHYSICS_STEP_S * NS_PER_S)
+        period_ns = round(NS_PER_S / _RATE_HZ)
         t_ns, next_frame_ns = 0, 0  # the first /clock is one step in: ROS reads 0 as "no time"
         if not self._started.is_set():
             self.rospy.loginfo(
@@ -133,7 +133,7 @@ class VirtualDuckiebotNode:
         while not self.rospy.is_shutdown() and not (until is not None and until()):
             t_ns += step_ns
             with self._lock:
-                self.sim.run_until(t_ns / _NS_PER_S)
+                self.sim.run_until(t_ns / NS_PER_S)
                 readings = self.sim.pop_encoder_readings()
             self._publish_clock(t_ns)
             muted = self.mute_encoders_after is not None and t_ns >= self.mute_encoders_after * 1e9
@@ -143,7 +143,7 @@ class VirtualDuckiebotNode:
                 self.drivers["simulator_node"].publish(t_ns)
                 self.drivers["camera_node"].publish(t_ns)
                 next_frame_ns += period_ns
-            delay = started + t_ns / _NS_PER_S / self.rate - time.monotonic()
+            delay = started + t_ns / NS_PER_S / self.rate - time.monotonic()
             if delay > 0:
                 time.sleep(delay)
 

@@ -29,6 +29,7 @@ import numpy as np
 from duckielib import leds as led_tables
 from duckielib.config import DB21, RobotConfig
 from duckielib.errors import ConfigError, SimulationError
+from duckielib.missions import TASK_START
 from duckielib.sim.encoders import Encoder, EncoderReading
 from duckielib.sim.noise import NoiseProfile, noise_profile
 from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, Pose, Robot, Twist, _heading_of
@@ -39,8 +40,9 @@ if TYPE_CHECKING:
 
 __all__ = ["Simulator", "LEDState", "Trace", "START_POSE", "PHYSICS_RATE_HZ"]
 
-#: Where the course's task starts: (x, y, theta) in metres and radians, on the mat grid.
-START_POSE = (0.32, 0.32, math.pi / 2)
+#: Where the course's task starts: (x, y, theta) in metres and radians, on the mat grid
+#: (:data:`duckielib.missions.TASK_START`).
+START_POSE = TASK_START
 
 #: Default physics rate, in Hz.
 PHYSICS_RATE_HZ = 100.0
