@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Dict, List, Optional, Set, Tuple
 from autograder.driving import MAX_SCORE, POINTS, Driving
 
 if TYPE_CHECKING:  # pragma: no cover - types only
-    from autograder.grade import StudentResult
+    from autograder.results import StudentResult
 
 __all__ = ["failure_messages", "write_feedback"]
 

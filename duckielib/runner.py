@@ -43,7 +43,14 @@ from duckielib.solution import (
     load_solution,
 )
 
-__all__ = ["MissionError", "MissionRun", "OUTPUTS", "RECORDED", "run_mission"]
+__all__ = [
+    "MissionError",
+    "MissionRun",
+    "OUTPUTS",
+    "RECORDED",
+    "drive_and_record",
+    "run_mission",
+]
 
 #: The files a run writes in its folder.
 OUTPUTS = ("mission.bag", "trajectory.png", "mission.gif", "summary.json", "log.txt")
@@ -158,21 +165,28 @@ def _unwritten_part(error: BaseException) -> Optional[str]:
     return None
 
 
-def _crash_message(node: str, error: BaseException) -> str:
+def _crash_message(node: str, error: BaseException) -> Tuple[type, str]:
+    """What stopped the ``node``: the error class to raise, and its sentence.
+
+    A :class:`SolutionError` when a part of the solution is unfinished, a
+    :class:`MissionError` for any other failure.
+    """
     if isinstance(error, SolutionError):
-        return str(error)
+        return SolutionError, str(error)
     if isinstance(error, NotImplementedError):
         name = _unwritten_part(error)
         if name is not None:
             part = CONTRACT[name]
-            return (
+            return SolutionError, (
                 f"Finish notebook {part.notebook}: {part.name} is not written yet "
                 f"(the {node} needs it)."
             )
-        return f"The {node} called a function that is not written yet (NotImplementedError)."
+        return MissionError, (
+            f"The {node} called a function that is not written yet (NotImplementedError)."
+        )
     last = traceback.extract_tb(error.__traceback__)[-1:] or None
     where = f" (line {last[0].lineno} of {last[0].name})" if last else ""
-    return f"The {node} stopped with {type(error).__name__}: {error}{where}."
+    return MissionError, f"The {node} stopped with {type(error).__name__}: {error}{where}."
 
 
 def _clear(folder: Path) -> None:
@@ -229,7 +243,9 @@ def run_mission(
     _clear(folder)
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
     with modules_installed(replace_real=True):
-        namespace, simulated, wall, failure = _drive(parts, chosen, noise, seed, files, time_limit)
+        namespace, simulated, wall, failure = drive_and_record(
+            parts, chosen, noise, seed, files, time_limit
+        )
     if failure is None:
         return _write_run(chosen, namespace, noise, seed, label, files, simulated, wall, animation)
     if files["bag"].is_file():
@@ -284,7 +300,7 @@ def _write_run(
     return MissionRun(report, summary, folder, files, simulated, wall)
 
 
-def _drive(
+def drive_and_record(
     parts: Any,
     chosen: Mission,
     noise: str,
@@ -293,6 +309,8 @@ def _drive(
     time_limit: float,
 ) -> Tuple[str, float, float, Optional[DuckielibError]]:
     """Run the mission's nodes on a new virtual Duckiebot, recording the bag and the log.
+
+    :func:`run_mission` without the figures and the summary (``duckie bench mission`` times it).
 
     Returns:
         The robot's namespace, the simulated seconds, the wall-clock seconds, and the error
@@ -320,7 +338,7 @@ def _drive(
     bot.launch(mission_main, name="mission_node")
     topics = [bot.namespace + name for name in RECORDED]
     recorder = BagRecorder(files["bag"], topics, graph=graph)
-    crash: Optional[str] = None
+    crash: Optional[Tuple[type, str]] = None
     wall = time.perf_counter()
     try:
         ended = bot.run_until(lambda: bool(finished), time_limit)
@@ -331,9 +349,10 @@ def _drive(
             if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
         ]
         if errors and not ended:
-            crash = f"The {errors[0].node} logged an error: {errors[0].text.splitlines()[-1]}"
+            said = errors[0].text.splitlines()[-1]
+            crash = (MissionError, f"The {errors[0].node} logged an error: {said}")
     except NodeCrashed as error:
-        node = str(error).split()[1].rsplit("/", 1)[-1]
+        node = error.node.rsplit("/", 1)[-1]
         cause = error.__cause__ or error
         crash = _crash_message(node.replace("_", " "), cause)
         ended = False
@@ -346,8 +365,9 @@ def _drive(
         files["log"].write_text(log, encoding="utf-8")
     if crash is None and recorder.error is not None:
         crash = (
+            MissionError,
             f"Recording the bag failed ({recorder.error}); what reached the disk is in "
-            f"{recorder.active_path.name}, which duckie bag repair recovers."
+            f"{recorder.active_path.name}, which duckie bag repair recovers.",
         )
     return (
         bot.namespace,
@@ -358,7 +378,7 @@ def _drive(
 
 
 def _failure(
-    crash: Optional[str],
+    crash: Optional[Tuple[type, str]],
     ended: bool,
     files: Dict[str, Path],
     namespace: str,
@@ -368,9 +388,8 @@ def _failure(
     """Why the run stopped early, as the error to raise; None when it ended."""
     failure: Optional[DuckielibError] = None
     if crash is not None:
-        failure = (SolutionError if crash.startswith("Finish notebook") else MissionError)(
-            f"{crash} The run's log is in {files['log']}."
-        )
+        kind, said = crash
+        failure = kind(f"{said} The run's log is in {files['log']}.")
     elif not ended and _announced_done(files["bag"], namespace):
         failure = MissionError(
             f"The mission node announced '{DONE}' but did not end within {time_limit:.0f} "

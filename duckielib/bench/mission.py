@@ -66,7 +66,9 @@ def _drive(solution: Any) -> float:
     with tempfile.TemporaryDirectory() as folder, modules_installed(replace_real=True):
         files = {"bag": Path(folder) / "mission.bag", "log": Path(folder) / "log.txt"}
         chosen = mission_named("square_then_circle")
-        return runner._drive(solution, chosen, "ideal", 0, files, runner.DEFAULT_TIME_LIMIT_S)[2]
+        return runner.drive_and_record(
+            solution, chosen, "ideal", 0, files, runner.DEFAULT_TIME_LIMIT_S
+        )[2]
 
 
 @contextlib.contextmanager

@@ -55,7 +55,16 @@ _parked: set = set()
 
 
 class NodeCrashed(DuckielibError):
-    """A node's code raised an exception; the node was shut down."""
+    """A node's code raised an exception; the node was shut down.
+
+    Attributes:
+        node: the full name of the node that crashed (``/duckiebot/mission_node``); the
+            exception it raised is this one's ``__cause__``.
+    """
+
+    def __init__(self, message: str, node: str = "") -> None:
+        super().__init__(message)
+        self.node = node
 
 
 class LogRecord:
@@ -332,7 +341,8 @@ class Graph:
             where = "in the log above" if self.echo_logs else "in graph.log"
             raise NodeCrashed(
                 f"Node {name} stopped with {type(error).__name__}: {error} "
-                f"(its traceback is {where})."
+                f"(its traceback is {where}).",
+                node=name,
             ) from error
 
     # -- actors -----------------------------------------------------------------------------

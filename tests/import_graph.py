@@ -1,0 +1,179 @@
+"""The project's own import graph: rooms, arrows between them, circles, the largest modules.
+
+Run it from the repository's root to see the structure::
+
+    .venv/bin/python tests/import_graph.py
+
+A module's imports are read from its source with :mod:`ast`, never by importing it. An import
+at a module's top level is an arrow that holds as soon as the module loads; one inside a
+function (a lazy import) is listed apart, since it only holds when that function runs. A circle
+is a set of modules that reach each other through top-level arrows. The tests
+(``tests/test_purity.py``) use :func:`graph` to keep the arrows the way they should point.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from collections import defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict, List, Set
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("duckielib", "autograder")
+
+
+@dataclass
+class Graph:
+    """Each module's lines and the project's modules it imports, at its top level or lazily."""
+
+    lines: Dict[str, int] = field(default_factory=dict)
+    top: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
+    lazy: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
+    typing: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
+
+    def circles(self, every: bool = False) -> List[List[str]]:
+        """The sets of modules that import each other, largest first.
+
+        Args:
+            every: count lazy imports and those for type hints only too, not just the top level.
+        """
+        edges: Dict[str, Set[str]] = defaultdict(set)
+        for kinds in (self.top, self.lazy, self.typing) if every else (self.top,):
+            for module, imported in kinds.items():
+                edges[module] |= imported
+        index: Dict[str, int] = {}
+        low: Dict[str, int] = {}
+        stack: List[str] = []
+        found: List[List[str]] = []
+
+        def visit(module: str) -> None:  # Tarjan's strongly connected components
+            index[module] = low[module] = len(index)
+            stack.append(module)
+            for other in sorted(edges.get(module, ())):
+                if other not in index:
+                    visit(other)
+                    low[module] = min(low[module], low[other])
+                elif other in stack:
+                    low[module] = min(low[module], index[other])
+            if low[module] == index[module]:
+                group = []
+                while True:
+                    member = stack.pop()
+                    group.append(member)
+                    if member == module:
+                        break
+                if len(group) > 1:
+                    found.append(sorted(group))
+
+        for module in sorted(self.lines):
+            if module not in index:
+                visit(module)
+        return sorted(found, key=len, reverse=True)
+
+    def arrows(self, source: str, target: str) -> List[str]:
+        """Every import from a module under ``source`` to one under ``target``, of any kind."""
+        said = []
+        for kind, edges in (("top", self.top), ("lazy", self.lazy), ("typing", self.typing)):
+            for module, imported in sorted(edges.items()):
+                if _under(module, source):
+                    said += [f"{module} -> {other} ({kind})" for other in sorted(imported)
+                             if _under(other, target)]  # fmt: skip
+        return said
+
+
+def _under(module: str, prefix: str) -> bool:
+    return module == prefix or module.startswith(prefix + ".")
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _resolve(name: str, known: Set[str]) -> str | None:
+    """The project module ``name`` refers to (a name imported from a module is that module)."""
+    while name:
+        if name in known:
+            return name
+        name = name.rpartition(".")[0]
+    return None
+
+
+def graph() -> Graph:
+    """The import graph of ``duckielib`` and ``autograder``."""
+    paths = sorted(path for package in PACKAGES for path in (ROOT / package).rglob("*.py"))
+    known = {_module_name(path) for path in paths}
+    result = Graph()
+    for path in paths:
+        module = _module_name(path)
+        text = path.read_text(encoding="utf-8")
+        result.lines[module] = len(text.splitlines())
+        tree = ast.parse(text, str(path))
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+        top_level = set(map(id, tree.body))
+        for node in ast.walk(tree):
+            names: List[str] = []
+            if isinstance(node, ast.Import):
+                names = [alias.name for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parent = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join(parent + ([base] if base else []))
+                # A name that is a module is an arrow to it; any other name, to its module.
+                names = [
+                    f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base
+                    for alias in node.names
+                ]
+            else:
+                continue
+            guarded = isinstance(node, ast.ImportFrom) and node.module == "__future__"
+            for name in names:
+                target = _resolve(name, known)
+                if target is None or target == module or guarded:
+                    continue
+                if _in_type_checking(tree, node):
+                    result.typing[module].add(target)
+                elif id(node) in top_level:
+                    result.top[module].add(target)
+                else:
+                    result.lazy[module].add(target)
+    return result
+
+
+def _in_type_checking(tree: ast.Module, node: ast.AST) -> bool:
+    """Whether ``node`` sits in a top-level ``if TYPE_CHECKING:`` block (no arrow at run time)."""
+    return any(
+        isinstance(statement, ast.If)
+        and "TYPE_CHECKING" in ast.unparse(statement.test)
+        and any(node is inner for inner in ast.walk(statement))
+        for statement in tree.body
+    )
+
+
+def report(found: Graph) -> str:
+    """The structure in a few lines, for people."""
+    rooms: Dict[str, int] = defaultdict(int)
+    for module, count in found.lines.items():
+        rooms[".".join(module.split(".")[:2])] += count
+    lines = ["rooms (lines):"]
+    lines += [f"  {room:32s} {count:6d}" for room, count in sorted(rooms.items())]
+    lines.append("largest modules (lines):")
+    largest = sorted(found.lines.items(), key=lambda item: -item[1])[:8]
+    lines += [f"  {module:40s} {count:6d}" for module, count in largest]
+    for every, what in ((False, "top-level imports"), (True, "any import, lazy or for types")):
+        circles = found.circles(every)
+        lines.append(f"circles ({what}): {len(circles)}")
+        lines += [f"  {' <-> '.join(group)}" for group in circles]
+    upward = found.arrows("duckielib", "autograder")
+    lines.append(f"arrows from duckielib to autograder: {len(upward)}")
+    lines += [f"  {arrow}" for arrow in upward]
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    sys.stdout.write(report(graph()) + "\n")
