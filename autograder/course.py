@@ -32,6 +32,8 @@ __all__ = [
     "assignments",
     "autograde",
     "compare_release",
+    "log_tail",
+    "nbgrader_api",
     "nbgrader_config",
     "release_course",
 ]
@@ -95,8 +97,11 @@ def nbgrader_config(
     return config
 
 
-def _api(config: Config) -> NbGraderAPI:  # noqa: F821
-    # nbgrader runs alembic by name: the environment's bin must come first on PATH.
+def nbgrader_api(config: Config) -> NbGraderAPI:  # noqa: F821
+    """Nbgrader's API on ``config``, with the environment's programs first on PATH.
+
+    nbgrader runs alembic by name: the environment's bin must come first on PATH.
+    """
     bin_dir = str(Path(sys.executable).parent)
     if os.environ.get("PATH", "").split(os.pathsep)[0] != bin_dir:
         os.environ["PATH"] = bin_dir + os.pathsep + os.environ.get("PATH", "")
@@ -105,7 +110,8 @@ def _api(config: Config) -> NbGraderAPI:  # noqa: F821
     return NbGraderAPI(config=config)
 
 
-def _log_tail(result: Mapping[str, object]) -> str:
+def log_tail(result: Mapping[str, object]) -> str:
+    """The last lines of an nbgrader API call's log worth showing: its errors, or its end."""
     log = str(result.get("log") or result.get("error") or "")
     errors = [line for line in log.splitlines() if "[ERROR]" in line or "Error" in line]
     return "\n".join((errors or log.splitlines())[-6:])
@@ -131,7 +137,7 @@ def release_course(
         raise CourseError(f"{source} has no assignment folder with a notebook to release.")
     with tempfile.TemporaryDirectory(prefix="duckie-release-") as work:
         staged = Path(work) / "release"
-        api = _api(
+        api = nbgrader_api(
             nbgrader_config(
                 root=source.parent, release=staged, db=Path(work) / "gradebook.db", source=source
             )
@@ -139,7 +145,7 @@ def release_course(
         for name in names:
             result = api.generate_assignment(name, force=True)
             if not result["success"]:
-                raise CourseError(f"nbgrader could not release {name}:\n{_log_tail(result)}")
+                raise CourseError(f"nbgrader could not release {name}:\n{log_tail(result)}")
         if release.exists():
             shutil.rmtree(release)
         shutil.copytree(staged, release)
@@ -227,11 +233,11 @@ def autograde(
     config = nbgrader_config(root=work, release="release", db=work / "gradebook.db", source=source)
     config.CourseDirectory.submitted_directory = "submitted"
     config.CourseDirectory.autograded_directory = "autograded"
-    api = _api(config)
+    api = nbgrader_api(config)
     for name in names:
         result = api.generate_assignment(name, force=True)
         if not result["success"]:
-            raise CourseError(f"nbgrader could not set up {name}:\n{_log_tail(result)}")
+            raise CourseError(f"nbgrader could not set up {name}:\n{log_tail(result)}")
     results: Dict[str, Scores] = {}
     from nbgrader.api import Gradebook
 
@@ -248,7 +254,7 @@ def autograde(
             scores.logs[name] = str(result.get("log") or "")
             if not result["success"]:
                 raise CourseError(
-                    f"nbgrader could not autograde {name} of {student}:\n{_log_tail(result)}"
+                    f"nbgrader could not autograde {name} of {student}:\n{log_tail(result)}"
                 )
         with Gradebook(config.CourseDirectory.db_url) as gradebook:
             for name in names:

@@ -38,7 +38,14 @@ from pathlib import Path, PurePosixPath
 from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 
 from autograder.cascade import Dependencies
-from autograder.course import ROOT, CourseError, _api, _log_tail, assignments, nbgrader_config
+from autograder.course import (
+    ROOT,
+    CourseError,
+    assignments,
+    log_tail,
+    nbgrader_api,
+    nbgrader_config,
+)
 from autograder.driving import MAX_SCORE, MISSIONS
 from autograder.feedback import write_feedback
 from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
@@ -182,11 +189,11 @@ def _set_up(work: Path, source: Path, course: List[str], names: List[str]) -> _C
     )
     stamp = work / "course.json"
     if not (stamp.is_file() and json.loads(stamp.read_text()).get("key") == key):
-        api = _api(config)
+        api = nbgrader_api(config)
         for name in course:
             result = api.generate_assignment(name, force=True)
             if not result["success"]:
-                raise CourseError(f"nbgrader could not set up {name}:\n{_log_tail(result)}")
+                raise CourseError(f"nbgrader could not set up {name}:\n{log_tail(result)}")
         write_atomic(stamp, json.dumps({"key": key}))
     buffer = io.BytesIO()
     with tarfile.open(fileobj=buffer, mode="w:gz") as archive:

@@ -393,7 +393,7 @@ class _Unit:
         return True
 
     def grade(self) -> Dict[str, Any]:
-        from autograder.course import _api, nbgrader_config
+        from autograder.course import nbgrader_api, nbgrader_config
 
         began = time.monotonic()
         self.root.mkdir()
@@ -412,7 +412,7 @@ class _Unit:
             _sandboxed_execute_class(self) if getattr(pp, "__name__", "") == "Execute" else pp
             for pp in _default_autograde_preprocessors()
         ]
-        api = _api(config)
+        api = nbgrader_api(config)
         try:
             return self._grade(api, config, began)
         finally:
@@ -502,9 +502,9 @@ def _default_autograde_preprocessors() -> list:
 
 
 def _why(outcome: Dict[str, object]) -> str:
-    from autograder.course import _log_tail
+    from autograder.course import log_tail
 
-    lines = [line for line in _log_tail(outcome).splitlines() if line.strip()]
+    lines = [line for line in log_tail(outcome).splitlines() if line.strip()]
     return lines[-1][:300] if lines else "no log"
 
 
