@@ -117,8 +117,12 @@ STARTED = """(prompts) => [...document.querySelectorAll(prompts)]
 
 
 def run_all_in_the_browser(page, port, name):
-    """Open a notebook of course/, Run > Run All Cells, wait until Run All is over."""
-    page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?token={TOKEN}")
+    """Open a notebook of course/ alone, Run > Run All Cells, wait until Run All is over.
+
+    ``reset`` starts from an empty workspace: the notebooks opened before are not restored
+    beside it.
+    """
+    page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?reset&token={TOKEN}")
     idle = f"{SHOWN} .jp-Notebook-ExecutionIndicator[data-status='idle']"
     page.wait_for_selector(idle, timeout=60_000)
     for _ in range(3):  # a click while the page is still settling can be lost: click again
@@ -209,10 +213,17 @@ def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(tmp_path, 
     student_copy(root / "course", reference_answers())
     typed = "My odometry ended 3.1 cm and 2 deg from the truth on the realistic robot."
     with lab(tmp_path, root) as port:
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
         for name in ("02_ros_concepts", "06_driving", "09_mission", "10_bag_analysis"):
-            run_all_in_the_browser(page, port, name)
+            # A page of its own for each notebook, as a student who opens one at a time.
+            page = browser.new_page(viewport={"width": 1400, "height": 900})
+            try:
+                run_all_in_the_browser(page, port, name)
+            except PlaywrightTimeout:
+                page.screenshot(path=str(tmp_path / f"{name}.png"), full_page=True)
+                pytest.fail(f"Run All of {name} did not end; see {tmp_path / name}.png")
             assert page.locator(STDERR).all_inner_texts() == [], f"cells of {name} showed errors"
+            if name != "10_bag_analysis":
+                page.close()
         # Still in 10_bag_analysis: double-click the answer cell, type, render, save.
         cell = page.locator(f"{SHOWN} .jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
         cell.scroll_into_view_if_needed()
