@@ -62,6 +62,7 @@ __all__ = [
     "drive",
     "drive_missions",
     "driving_score",
+    "not_driven",
     "part_points",
     "score_bag",
 ]
@@ -131,6 +132,11 @@ def part_points(mission: str = "square_then_circle") -> Dict[str, float]:
     return points
 
 
+def not_driven(why: str, missions: Sequence[str] = MISSIONS) -> Dict[str, Driving]:
+    """Each of ``missions`` scored zero, with the one reason ``why`` none was driven."""
+    return {name: Driving(reasons=[why], out_of=part_points(name)) for name in missions}
+
+
 def driving_score(missions: Dict[str, Driving]) -> float:
     """The driving score of a student: the mean of their missions' scores, out of 100."""
     if not missions:
@@ -171,8 +177,7 @@ def drive_missions(
         try:
             text = export_solution(notebooks, strict=False).source
         except DuckielibError as error:
-            why = f"Your notebooks could not be exported: {error}"
-            return {name: Driving(reasons=[why], out_of=part_points(name)) for name in missions}
+            return not_driven(f"Your notebooks could not be exported: {error}", missions)
     if folder.exists():
         shutil.rmtree(folder)
     folder.mkdir(parents=True)

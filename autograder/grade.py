@@ -267,7 +267,7 @@ class _Writer:
 
     @functools.cached_property
     def answers(self) -> Set[Tuple[str, str]]:
-        """The answers in words of the graded assignments: cells nbgrader grades by hand."""
+        """The answers in words of the graded assignments: the grade cells that are markdown."""
         from nbgrader.api import Gradebook, MissingEntry
 
         found = set()
@@ -278,9 +278,10 @@ class _Writer:
                 except MissingEntry:
                     continue
                 for notebook in notebooks:
-                    written = {cell.name for cell in notebook.solution_cells}
                     found |= {
-                        (name, cell.name) for cell in notebook.grade_cells if cell.name in written
+                        (name, cell.name)
+                        for cell in notebook.grade_cells
+                        if cell.cell_type == "markdown"
                     }
         return found
 
@@ -575,7 +576,7 @@ def write_grades(out: Path, source: Path = ROOT / "solutions") -> List[StudentRe
 
     Args:
         out: the folder ``duckie grade --out`` wrote.
-        source: the course source (the assignments' order, the answers' rubrics).
+        source: the course source (the assignments' order).
 
     Returns:
         One result per student, in name order.
@@ -602,7 +603,7 @@ def write_grades(out: Path, source: Path = ROOT / "solutions") -> List[StudentRe
     graded = {name for result in results for name, _ in result.cells}
     order = assignments(source)
     names = [name for name in order if name in graded] + sorted(graded - set(order))
-    writer = _Writer(out, names, {}, f"sqlite:///{database}", rubrics=rubrics(Path(source), names))
+    writer = _Writer(out, names, {}, f"sqlite:///{database}")
     writer.read_people_grades(results)
     for result in results:
         writer.results[result.student] = result

@@ -440,7 +440,7 @@ class _Unit:
         cells, to_grade = _scores(config, self.student, self.names)
         missions: Dict[str, Any] = {}
         if self.task.get("driving"):
-            from autograder.driving import MISSIONS, Driving, drive_missions, part_points
+            from autograder.driving import drive_missions, not_driven
 
             before = time.monotonic()
             if handed_in:
@@ -456,10 +456,7 @@ class _Unit:
                             f"{self.limits.mission_seconds} s of wall time."
                         )
             else:
-                why = "No notebook was handed in: there was nothing to drive."
-                missions = {
-                    name: Driving(reasons=[why], out_of=part_points(name)) for name in MISSIONS
-                }
+                missions = not_driven("No notebook was handed in: there was nothing to drive.")
             self.timings["driving"] = time.monotonic() - before
         from autograder.results import StudentResult, to_data
 
