@@ -8,7 +8,10 @@ so ``rostopic echo``, ``rosservice call`` and ``rosbag record`` work on every to
 
 The node owns the clock: it publishes ``/clock`` as the simulation advances (100 steps per
 simulated second), and the other nodes run with ``use_sim_time`` (the launch file sets it).
-``~rate`` is how fast simulated time runs against the wall clock (1.0: real time).
+``~rate`` is how fast simulated time runs against the wall clock (1.0: real time), at most:
+when the machine is too busy to keep up, simulated time runs slower (as Gazebo's real-time
+factor drops) rather than catching up in a burst, in which a node that answers a few
+milliseconds late would see whole simulated seconds go by.
 
 Private parameters: ``~noise`` (``ideal`` or ``realistic``), ``~seed``, ``~rate``, ``~mission``
 (the start pose is that mission's), ``~mute_encoders_after`` (simulated seconds after which
@@ -32,11 +35,12 @@ from duckielib.rostime import NS_PER_S
 from duckielib.sim import drivers
 from duckielib.sim.simulator import Simulator
 
-__all__ = ["PHYSICS_STEP_S", "VirtualDuckiebotNode", "main"]
+__all__ = ["PHYSICS_STEP_S", "Pace", "VirtualDuckiebotNode", "main"]
 
 #: Simulated seconds between two ``/clock`` messages (and physics updates).
 PHYSICS_STEP_S = 0.01
 _RATE_HZ = 30.0  # ground truth and camera
+_MAX_LAG_S = 0.02  # wall seconds the clock may fall behind ~rate and still catch up
 
 
 class _Locked:
@@ -60,6 +64,41 @@ class _Locked:
                 return value(*args, **kwargs)
 
         return call
+
+
+class Pace:
+    """Keeps simulated time at ``rate`` times the wall clock, or slower, never in bursts.
+
+    When a step took longer than its share of wall time, the clock may catch up by at most
+    ``max_lag`` wall seconds; beyond that, simulated time simply runs slower.
+
+    Args:
+        rate: simulated seconds per wall-clock second.
+        max_lag: wall seconds the clock may fall behind and still catch up.
+        clock: the wall clock, in seconds (``time.monotonic``).
+        sleep: how to wait, in wall seconds (``time.sleep``).
+    """
+
+    def __init__(
+        self,
+        rate: float,
+        max_lag: float = _MAX_LAG_S,
+        clock: Callable[[], float] = time.monotonic,
+        sleep: Callable[[float], None] = time.sleep,
+    ) -> None:
+        self.rate = rate
+        self.max_lag = max_lag
+        self._clock = clock
+        self._sleep = sleep
+        self._origin = clock()  # the wall time at which simulated time was 0
+
+    def wait(self, t: float) -> None:
+        """Wait until simulated time ``t`` (seconds) is due on the wall clock."""
+        delay = self._origin + t / self.rate - self._clock()
+        if delay > 0:
+            self._sleep(delay)
+        elif delay < -self.max_lag:
+            self._origin -= delay + self.max_lag
 
 
 class VirtualDuckiebotNode:
@@ -129,7 +168,7 @@ class VirtualDuckiebotNode:
         while not self._started.wait(0.1):
             if self.rospy.is_shutdown() or (until is not None and until()):
                 return
-        started = time.monotonic()
+        pace = Pace(self.rate)
         while not self.rospy.is_shutdown() and not (until is not None and until()):
             t_ns += step_ns
             with self._lock:
@@ -143,9 +182,7 @@ class VirtualDuckiebotNode:
                 self.drivers["simulator_node"].publish(t_ns)
                 self.drivers["camera_node"].publish(t_ns)
                 next_frame_ns += period_ns
-            delay = started + t_ns / NS_PER_S / self.rate - time.monotonic()
-            if delay > 0:
-                time.sleep(delay)
+            pace.wait(t_ns / NS_PER_S)
 
 
 def main() -> None:
