@@ -5,8 +5,9 @@ run here), and ``duckie mission`` runs that solution on each mission of :data:`M
 then circle, the "D", the straight-line task and the rotation task) inside the same sandbox as
 their notebooks, each run a process of its own. Each mission is scored out of 100 on its own,
 and the driving score is their mean. The grader copies each run's bag into a folder of its
-own and scores what the robot did from that copy, with :func:`duckielib.behaviour.mission_report`
-(states, colours, stops) and :func:`autograder.motion.state_motions` (the driving):
+own and scores what the robot did from that copy, with
+:func:`duckielib.bags.behaviour.mission_report` (states, colours, stops) and
+:func:`autograder.motion.state_motions` (the driving):
 
 =================================================  ======
 a readable bag with the mission's states               5
@@ -216,7 +217,7 @@ def drive(
     Returns:
         The driving score with its reasons.
     """
-    command = [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "solution.py"]
+    command = [sys.executable, "-m", "duckielib.tools.cli", "mission", "--solution", "solution.py"]
     command += ["--mission", mission, "--out", mission, "--no-animation"]
     run_folder = folder / mission
     try:
@@ -384,7 +385,7 @@ def _score_copy(path: Path, mission: str) -> Driving:
     """Score the bag at ``path``, the grader's own copy of a run's bag."""
     from autograder.motion import driving_problems, state_motions
     from duckielib.bags import Bag, pose_tracks
-    from duckielib.behaviour import mission_report
+    from duckielib.bags.behaviour import mission_report
     from duckielib.errors import DuckielibError
     from duckielib.missions import mission_named
 

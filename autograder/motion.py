@@ -10,7 +10,7 @@ checks, and the grader's summary lists them under ``"motion"``.
 
 This module works out where a perfect move ends, which is part of what a student writes in
 notebook 09's graded ``mission_node``: it belongs to the grader and never to ``duckielib``,
-which students get. :func:`duckielib.behaviour.mission_report` gives the states, colours and
+which students get. :func:`duckielib.bags.behaviour.mission_report` gives the states, colours and
 stops the checks here start from.
 """
 
@@ -24,13 +24,13 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from duckielib.bags.analysis import PoseTrack, pose_tracks
-from duckielib.bags.io import Bag, PathLike
-from duckielib.behaviour import (
+from duckielib.bags.behaviour import (
     CLOSURE_TOLERANCE_M,
     STILL_TOLERANCE_M,
     MissionReport,
     StateRun,
 )
+from duckielib.bags.io import Bag, PathLike
 from duckielib.missions import (
     Arc,
     Mission,
@@ -516,7 +516,7 @@ def state_motions(
 
     Args:
         mission: the mission asked for.
-        report: what :func:`duckielib.behaviour.mission_report` read from the run's bag.
+        report: what :func:`duckielib.bags.behaviour.mission_report` read from the run's bag.
         bag_or_tracks: the same bag (a :class:`~duckielib.bags.Bag` or a path), or its pose
             tracks with record times (``pose_tracks(bag, "record")``).
 
@@ -538,7 +538,7 @@ def state_motions(
     return _state_motions(mission, report.states, truth, report.started)
 
 
-#: What :func:`duckielib.behaviour.mission_report` says about the robot's end: the way back and
+#: What :func:`duckielib.bags.behaviour.mission_report` says about the robot's end: the way back and
 #: the circle's end are checked here instead.
 _END_PROBLEMS = ("The robot ended ", "The bag has no ground truth")
 

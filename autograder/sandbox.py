@@ -99,7 +99,7 @@ def _readonly_paths() -> List[str]:
     which reads the list of robot modules in ``pyproject.toml``, as students do.
     """
     import duckielib
-    from duckielib.robot_project import PROJECT, ROOT
+    from duckielib.tools.deploy import PROJECT, ROOT
 
     paths = ["/usr", "/etc", sys.prefix, sys.base_prefix]
     library = Path(duckielib.__file__).resolve().parent
@@ -116,7 +116,7 @@ def _readonly_paths() -> List[str]:
 
 def _generated_robot_folders() -> List[str]:
     """The folders of the robot project that ``duckie robot prepare`` writes, where they exist."""
-    from duckielib.robot_project import GENERATED, PROJECT
+    from duckielib.tools.deploy import GENERATED, PROJECT
 
     return [str(PROJECT / name) for name in GENERATED if (PROJECT / name).is_dir()]
 

@@ -179,7 +179,7 @@ def raised_outside_tests(
         cell_seconds: the time limit of a cell, quoted for a cell that ran out of it.
     """
     from autograder.execute import NOT_RUN
-    from duckielib.handin import raised_cells
+    from duckielib.tools.handin import raised_cells
 
     raised = [
         cell
@@ -195,7 +195,7 @@ def raised_outside_tests(
 
 def _cells_that_stopped(name: str, sent: Any, executed: Any, cell_seconds: int) -> List[str]:
     """Sentences for the cells outside the tests that raised, and the tests that ran out of time."""
-    from duckielib.handin import raised_cells
+    from duckielib.tools.handin import raised_cells
 
     said = []
     raised = raised_outside_tests(name, sent, executed, cell_seconds)

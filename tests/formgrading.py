@@ -128,7 +128,7 @@ class Formgrader:
 def formgrader(out: Path):
     """``duckie formgrade OUT`` running, until the block ends; yields its :class:`Formgrader`."""
     server = Formgrader(free_port(), "formgrade-test")
-    command = [sys.executable, "-m", "duckielib.cli", "formgrade", str(out), "--"]
+    command = [sys.executable, "-m", "duckielib.tools.cli", "formgrade", str(out), "--"]
     command += ["--no-browser", f"--port={server.port}", f"--ServerApp.token={server.token}"]
     process = subprocess.Popen(
         command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True
@@ -151,7 +151,7 @@ def formgrader(out: Path):
 
 def duckie(*args: str) -> subprocess.CompletedProcess:
     """Run the ``duckie`` command line with ``args``; its exit status and output."""
-    command = [sys.executable, "-m", "duckielib.cli", *args]
+    command = [sys.executable, "-m", "duckielib.tools.cli", *args]
     return subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
 
 

@@ -15,7 +15,7 @@ FIGURE_LINE = re.compile(r"^[a-z0-9_]+: \S+$")
 
 def duckie(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", *args],
+        [sys.executable, "-m", "duckielib.tools.cli", *args],
         capture_output=True,
         text=True,
         timeout=300,
@@ -41,10 +41,10 @@ def test_bench_messages_prints_figures_headline_last():
 
 
 def test_bench_mission_says_where_the_time_goes_and_leaves_messages_as_they_were():
-    from duckielib import runner
-    from duckielib.bench import mission
     from duckielib.messages import String
     from duckielib.messages.message import Message
+    from duckielib.tools import runner
+    from duckielib.tools.bench import mission
 
     to_bytes, recorded = Message.to_bytes, runner.RECORDED
     figures = dict(mission.run())
@@ -104,7 +104,7 @@ def test_bad_command_line_exits_2_with_usage():
 
 
 def _benchmark_names():
-    from duckielib.bench import benchmarks
+    from duckielib.tools.bench import benchmarks
 
     return benchmarks()
 
@@ -114,7 +114,7 @@ def test_a_disk_that_fills_up_ends_the_mission_with_a_sentence(tmp_path):
         "import resource, signal, sys\n"
         "signal.signal(signal.SIGXFSZ, signal.SIG_IGN)\n"
         "resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))\n"
-        "from duckielib.cli import main\n"
+        "from duckielib.tools.cli import main\n"
         "sys.exit(main(sys.argv[1:]))\n"
     )
     result = subprocess.run(
@@ -139,9 +139,9 @@ def _interrupted_mission(folder, patch):
     """Run ``duckie mission`` in a child process whose ``patch`` arranges a Ctrl-C."""
     child = (
         "import os, signal, sys, threading, time\n"
-        "import duckielib.runner as runner\n"
+        "import duckielib.tools.runner as runner\n"
         f"{patch}\n"
-        "from duckielib.cli import main\n"
+        "from duckielib.tools.cli import main\n"
         "sys.exit(main(sys.argv[1:]))\n"
     )
     return subprocess.run(

@@ -25,8 +25,8 @@ from autograder.driving import (
     score_bag,
 )
 from autograder.sandbox import Limits
-from duckielib.runner import MissionError, run_mission
 from duckielib.solution import export_solution
+from duckielib.tools.runner import MissionError, run_mission
 
 pytestmark = pytest.mark.slow
 
@@ -262,7 +262,7 @@ def test_a_missing_or_broken_bag_scores_zero(tmp_path):
 
 
 def test_the_moves_geometry_is_the_graders_not_the_librarys():
-    from duckielib import behaviour
+    from duckielib.bags import behaviour
 
     assert not hasattr(behaviour, "_follow")
     assert not hasattr(behaviour, "StateMotion")

@@ -22,7 +22,7 @@ from autograder.driving import MISSIONS
 from autograder.execute import NOT_RUN
 from autograder.grade import grade_class, raised_outside_tests
 from autograder.sandbox import NOBODY, Limits, sandboxed_command
-from duckielib import robot_project
+from duckielib.tools import deploy as robot_project
 
 pytestmark = pytest.mark.slow
 
@@ -224,7 +224,7 @@ def test_duckie_grade_names_the_cells_outside_the_tests_that_raised_without_a_sa
     """The real command, without bubblewrap: the class's CSV and the feedback page say it."""
     submissions, out = tmp_path / "submissions", tmp_path / "out"
     _submission(submissions, "fay", ROOT / "course", edit=_stray_cell)
-    command = [sys.executable, "-m", "duckielib.cli", "grade", str(submissions), "--out"]
+    command = [sys.executable, "-m", "duckielib.tools.cli", "grade", str(submissions), "--out"]
     command += [str(out), "--assignment", ASSIGNMENT, "--no-driving", "--no-sandbox"]
     result = subprocess.run(command, capture_output=True, text=True, timeout=300, check=False)
     assert result.returncode == 0, result.stdout + result.stderr
@@ -315,7 +315,15 @@ def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_probl
 
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):
     result = subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", "grade", str(tmp_path / "nope"), "--out", "x"],
+        [
+            sys.executable,
+            "-m",
+            "duckielib.tools.cli",
+            "grade",
+            str(tmp_path / "nope"),
+            "--out",
+            "x",
+        ],
         capture_output=True,
         text=True,
         check=False,

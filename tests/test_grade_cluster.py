@@ -106,7 +106,7 @@ def test_a_cluster_grades_as_the_local_run_and_loses_no_student_to_a_dead_worker
 
 def test_duckie_grade_refuses_a_scheduler_that_is_not_there(tmp_path):
     (tmp_path / "submissions" / "ada").mkdir(parents=True)
-    command = [sys.executable, "-m", "duckielib.cli", "grade", str(tmp_path / "submissions")]
+    command = [sys.executable, "-m", "duckielib.tools.cli", "grade", str(tmp_path / "submissions")]
     command += ["--out", str(tmp_path / "out"), "--scheduler", "tcp://127.0.0.1:9", "--no-sandbox"]
     result = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
     assert result.returncode == 1
@@ -143,7 +143,7 @@ def test_a_second_run_grades_only_the_new_and_the_changed(sandbox, tmp_path):
 def test_ctrl_c_keeps_the_students_graded_so_far_and_the_next_run_finishes(sandbox, tmp_path):
     submissions = _class(tmp_path / "submissions")
     out = tmp_path / "out"
-    command = [sys.executable, "-m", "duckielib.cli", "grade", str(submissions), "--out"]
+    command = [sys.executable, "-m", "duckielib.tools.cli", "grade", str(submissions), "--out"]
     command += [str(out), "--assignment", ASSIGNMENT, "--no-driving"]
     process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     deadline = time.monotonic() + 240

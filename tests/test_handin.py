@@ -10,8 +10,8 @@ import pytest
 
 from autograder.course import ROOT, assignments
 from autograder.grade import find_submissions, read_submission
-from duckielib.cli import main
-from duckielib.handin import HandinError, check_course, handin, run_notebook
+from duckielib.tools.cli import main
+from duckielib.tools.handin import HandinError, check_course, handin, run_notebook
 
 pytestmark = pytest.mark.notebook
 

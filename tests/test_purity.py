@@ -1,6 +1,7 @@
 """The robot-deployed modules stay pure: Python 3.8, standard library and numpy only.
 
-The list of those modules is kept once, in pyproject.toml under ``[tool.duckielib]``.
+Which modules those are is a rule about folders: all of ``duckielib/`` but its laptop packages
+(``duckielib.tools.deploy.LAPTOP_PACKAGES``), the very files ``duckie robot prepare`` deploys.
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ import sys
 from pathlib import Path
 
 import pytest
-import tomllib
+
+from duckielib.tools.deploy import LAPTOP_PACKAGES, robot_module_files
 
 ROOT = Path(__file__).resolve().parents[1]
 LAPTOP_ONLY = (
@@ -26,19 +28,16 @@ LAPTOP_ONLY = (
 )
 
 
-def robot_modules() -> list[str]:
-    config = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    return config["tool"]["duckielib"]["robot-modules"]
+def robot_modules() -> list[Path]:
+    """The robot-deployed Python files, relative to the repository."""
+    return [path for path in robot_module_files() if path.suffix == ".py"]
 
 
 def robot_module_names() -> list[str]:
     names = []
-    for entry in robot_modules():
-        path = ROOT / entry
-        files = sorted(path.rglob("*.py")) if path.is_dir() else [path]
-        for file in files:
-            parts = file.relative_to(ROOT).with_suffix("").parts
-            names.append(".".join(parts[:-1] if parts[-1] == "__init__" else parts))
+    for file in robot_modules():
+        parts = file.with_suffix("").parts
+        names.append(".".join(parts[:-1] if parts[-1] == "__init__" else parts))
     return names
 
 
@@ -67,9 +66,15 @@ def vermin_38(*paths: Path) -> subprocess.CompletedProcess:
     )
 
 
-def test_robot_modules_exist():
-    for entry in robot_modules():
-        assert (ROOT / entry).exists(), f"pyproject.toml lists {entry}, which does not exist"
+def test_the_folders_say_where_code_runs():
+    library = ROOT / "duckielib"
+    laptop = sorted(path.name for path in library.iterdir() if path.name in LAPTOP_PACKAGES)
+    assert laptop == sorted(LAPTOP_PACKAGES), "a laptop package is missing"
+    deployed = {path.parts[1] for path in robot_modules()}
+    assert not deployed & set(LAPTOP_PACKAGES)
+    # The robot gets the pure core and its packages: the messages, the in-process rospy,
+    # the nodes and the solution's loader.
+    assert {"messages", "ros", "nodes", "solution", "odometry.py", "missions.py"} <= deployed
 
 
 def test_robot_modules_run_on_python_3_8():
@@ -171,7 +176,7 @@ def test_ruff_format_is_clean():
 EDGES = {
     "pymunk": ("duckielib/sim/",),
     "rosbags": ("duckielib/bags/io.py",),
-    "matplotlib": ("duckielib/plots.py", "duckielib/sim/draw.py", "duckielib/sim/examples/"),
+    "matplotlib": ("duckielib/plots/", "duckielib/sim/examples/"),
 }
 
 
@@ -210,7 +215,7 @@ def test_the_library_students_receive_never_reaches_the_grader():
 def test_the_instructors_commands_join_duckie_through_entry_points():
     from importlib.metadata import entry_points
 
-    from duckielib.bench import benchmarks
+    from duckielib.tools.bench import benchmarks
 
     (commands,) = entry_points(group="duckie.commands")
     assert commands.value == "autograder.commands:add_commands"

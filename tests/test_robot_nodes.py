@@ -24,8 +24,8 @@ from test_purity import BLOCKER, LAPTOP_ONLY, vermin_38
 
 from duckielib.errors import DuckielibError
 from duckielib.missions import MISSIONS
-from duckielib.robot_project import prepare, robot_module_files
 from duckielib.solution import SolutionError, export_solution, reference_solution_dir
+from duckielib.tools.deploy import prepare, robot_module_files
 
 ROOT = Path(__file__).resolve().parents[1]
 PROJECT = ROOT / "robot_nodes"
@@ -39,7 +39,7 @@ PREPARED = ("deploy",)
 #: The laptop-only packages, less rospy: a robot has a real one.
 ROBOT_BLOCKED = tuple(name for name in LAPTOP_ONLY if name != "rospy")
 #: The modules the robot's nodes import from the deployed library.
-DEPLOYED_MODULES = ("duckielib.robot", "duckielib.nodes", "duckielib.safety")
+DEPLOYED_MODULES = ("duckielib.nodes.mains", "duckielib.nodes.course", "duckielib.nodes.safety")
 
 
 def dockerfile_instructions() -> list[tuple[str, str]]:
@@ -287,10 +287,10 @@ def test_script_is_a_thin_executable(script):
 
 def test_scripts_call_the_library_mains():
     expected = {
-        "odometry_node.py": ("duckielib.robot", "odometry_main"),
-        "light_service_node.py": ("duckielib.robot", "light_service_main"),
-        "mission_node.py": ("duckielib.robot", "mission_main"),
-        "camera_republisher_node.py": ("duckielib.robot", "camera_republisher_main"),
+        "odometry_node.py": ("duckielib.nodes.mains", "odometry_main"),
+        "light_service_node.py": ("duckielib.nodes.mains", "light_service_main"),
+        "mission_node.py": ("duckielib.nodes.mains", "mission_main"),
+        "camera_republisher_node.py": ("duckielib.nodes.mains", "camera_republisher_main"),
         "virtual_duckiebot_node.py": ("duckielib.sim.ros_node", "main"),
     }
     found = {}
@@ -440,7 +440,7 @@ def prepared(tmp_path_factory):
         [
             sys.executable,
             "-c",
-            f"from duckielib.robot_project import prepare; prepare(project={str(project)!r})",
+            f"from duckielib.tools.deploy import prepare; prepare(project={str(project)!r})",
         ],
         capture_output=True,
         text=True,
@@ -560,7 +560,7 @@ def test_prepare_refuses_a_folder_that_is_not_a_project(tmp_path):
 
 def duckie(*args: str) -> subprocess.CompletedProcess:
     return subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", *args],
+        [sys.executable, "-m", "duckielib.tools.cli", *args],
         capture_output=True,
         text=True,
         cwd=ROOT,

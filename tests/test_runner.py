@@ -11,10 +11,9 @@ from pathlib import Path
 import pytest
 
 from duckielib.bags import Bag, BagWriter
-from duckielib.behaviour import mission_report
+from duckielib.bags.behaviour import mission_report
 from duckielib.errors import ConfigError
 from duckielib.missions import D_SHAPE, SQUARE_THEN_CIRCLE
-from duckielib.runner import RECORDED, MissionError, run_mission
 from duckielib.solution import (
     MISSION_PARTS,
     SolutionError,
@@ -22,6 +21,7 @@ from duckielib.solution import (
     load_solution,
     reference_solution_dir,
 )
+from duckielib.tools.runner import RECORDED, MissionError, run_mission
 
 
 @pytest.fixture(scope="module")
@@ -209,7 +209,7 @@ def test_unknown_choices_are_refused_before_anything_runs(reference, tmp_path):
 def test_the_command_line_runs_the_mission_and_refuses_an_unfinished_course(tmp_path):
     root = Path(__file__).resolve().parents[1]
     done = subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", "mission", "--out", str(tmp_path / "run")],
+        [sys.executable, "-m", "duckielib.tools.cli", "mission", "--out", str(tmp_path / "run")],
         capture_output=True,
         text=True,
         check=False,
@@ -225,7 +225,16 @@ def test_the_command_line_runs_the_mission_and_refuses_an_unfinished_course(tmp_
         "log.txt",
     }
     refused = subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", "mission", "--solution", "course", "--out", "x"],
+        [
+            sys.executable,
+            "-m",
+            "duckielib.tools.cli",
+            "mission",
+            "--solution",
+            "course",
+            "--out",
+            "x",
+        ],
         capture_output=True,
         text=True,
         check=False,

@@ -204,7 +204,7 @@ def test_failures_inside_a_solution_name_the_call_and_notebook(tmp_path):
 
 def run_duckie(*args):
     return subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", *map(str, args)],
+        [sys.executable, "-m", "duckielib.tools.cli", *map(str, args)],
         capture_output=True,
         text=True,
         check=False,
@@ -233,7 +233,7 @@ def test_duckie_export_writes_the_module_and_reports(tmp_path):
 def test_duckie_export_errors_are_one_line(tmp_path, args, message):
     odometry_course(tmp_path)
     result = subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", *args],
+        [sys.executable, "-m", "duckielib.tools.cli", *args],
         capture_output=True,
         text=True,
         check=False,

@@ -448,12 +448,12 @@ class Simulator:
         Returns:
             The matplotlib axes.
         """
-        from duckielib.sim import draw
+        from duckielib.plots import world as draw
 
         return draw.plot_run(self, estimate=estimate, ax=ax)
 
     def animate(self, estimate: Optional[Any] = None, fps: float = 15.0) -> Any:
-        """An animation of the recorded run (see :func:`duckielib.sim.draw.animate_run`)."""
-        from duckielib.sim import draw
+        """An animation of the recorded run (see :func:`duckielib.plots.world.animate_run`)."""
+        from duckielib.plots import world as draw
 
         return draw.animate_run(self, estimate=estimate, fps=fps)

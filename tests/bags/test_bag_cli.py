@@ -20,7 +20,7 @@ SOLUTION = Path(__file__).with_name("bagtools.py")
 
 def duckie(*args):
     return subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", "bag", *map(str, args)],
+        [sys.executable, "-m", "duckielib.tools.cli", "bag", *map(str, args)],
         capture_output=True,
         text=True,
         timeout=120,
@@ -123,7 +123,7 @@ def test_bad_input_gets_one_line_and_status_1(tmp_path, encoders):
 def test_info_into_a_reader_that_stops_early_ends_quietly():
     # `duckie bag info run.bag | head -1`: the reader is gone before duckie writes.
     process = subprocess.Popen(
-        [sys.executable, "-m", "duckielib.cli", "bag", "info", str(sample_bag())],
+        [sys.executable, "-m", "duckielib.tools.cli", "bag", "info", str(sample_bag())],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,

@@ -5,10 +5,10 @@ from __future__ import annotations
 import pytest
 
 from duckielib.bags import SAMPLES, Bag, sample_bag
-from duckielib.behaviour import mission_report
+from duckielib.bags.behaviour import mission_report
 from duckielib.errors import BagError
 from duckielib.missions import SQUARE_THEN_CIRCLE
-from duckielib.runner import run_mission
+from duckielib.tools.runner import run_mission
 
 
 def test_the_sample_is_a_whole_mission_that_passes_every_check():

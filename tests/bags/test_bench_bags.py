@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from duckielib.bench import BENCHMARKS
-from duckielib.bench import bags as bench_bags
+from duckielib.tools.bench import BENCHMARKS
+from duckielib.tools.bench import bags as bench_bags
 
 
 def test_bags_benchmark_is_registered():
-    assert BENCHMARKS["bags"][0] == "duckielib.bench.bags"
+    assert BENCHMARKS["bags"][0] == "duckielib.tools.bench.bags"
 
 
 @pytest.mark.slow

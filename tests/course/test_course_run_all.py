@@ -22,7 +22,7 @@ import zipfile
 import pytest
 from coursetools import COURSE, NAMES, SOLUTIONS, reference_answers, student_copy, too_early
 
-from duckielib.handin import check_course, handin
+from duckielib.tools.handin import check_course, handin
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook, pytest.mark.timeout(1500)]
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from coursetools import too_early
 
-from duckielib.handin import NotebookRun, RaisedCell
+from duckielib.tools.handin import NotebookRun, RaisedCell
 
 
 def made_up_run(stop_number, kind="code", error="NameError: name 'x' is not defined"):

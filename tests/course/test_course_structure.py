@@ -239,7 +239,7 @@ def test_duckie_release_check_passes_on_the_committed_course():
     import sys
 
     result = subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", "release", "--check"],
+        [sys.executable, "-m", "duckielib.tools.cli", "release", "--check"],
         capture_output=True,
         text=True,
         check=False,

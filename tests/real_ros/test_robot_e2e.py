@@ -14,7 +14,7 @@ import time
 import pytest
 
 from duckielib.bags import Bag
-from duckielib.behaviour import mission_report
+from duckielib.bags.behaviour import mission_report
 from duckielib.missions import SQUARE_THEN_CIRCLE
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -80,7 +80,7 @@ def test_the_lights_follow_the_states(mission_run):
 
 
 def test_rosbag_record_has_the_pose_and_matches_the_in_process_run(mission_run, tmp_path):
-    from duckielib.runner import run_mission
+    from duckielib.tools.runner import run_mission
 
     bag, _, _ = mission_run
     recorded = Bag(bag)

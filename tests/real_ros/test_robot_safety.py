@@ -1,6 +1,6 @@
 """The wheels stop however a driving node ends, on a real roscore with the virtual Duckiebot.
 
-Each test runs ``robot_nodes``' mission node (so :class:`duckielib.safety.SafetyGuard` guards
+Each test runs ``robot_nodes``' mission node (so :class:`duckielib.nodes.safety.SafetyGuard` guards
 it) with a mission that would drive forward for ever, then ends it one way: it finishes, it
 is interrupted (SIGINT), its main code raises, a callback raises, or the encoders go silent.
 What must follow is read from a bag recorded by Debian's rosbag: the executed wheel commands

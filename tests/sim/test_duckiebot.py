@@ -9,7 +9,6 @@ import os
 import numpy as np
 import pytest
 
-from duckielib.bench import run_benchmark
 from duckielib.config import DB21
 from duckielib.errors import ConfigError
 from duckielib.leds import pattern_named
@@ -28,6 +27,7 @@ from duckielib.messages import (
 from duckielib.ros import Graph, modules, rosnode, rosparam, rospy, rosservice, rostopic
 from duckielib.ros.graph import ERROR, node_context
 from duckielib.sim import VirtualDuckiebot
+from duckielib.tools.bench import run_benchmark
 
 #: spec/duckiebot-interface.md, "Topics and services", plus the simulator-only ground truth.
 SPEC_TOPICS = {

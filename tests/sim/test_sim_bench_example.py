@@ -6,8 +6,8 @@ import re
 import subprocess
 import sys
 
-from duckielib.bench import BENCHMARKS, run_benchmark
 from duckielib.sim.examples import square
+from duckielib.tools.bench import BENCHMARKS, run_benchmark
 
 
 def test_sim_benchmark_prints_its_headline_last():
@@ -24,7 +24,7 @@ def test_sim_benchmark_prints_its_headline_last():
 
 def test_duckie_bench_sim_ends_with_the_real_time_factor():
     result = subprocess.run(
-        [sys.executable, "-m", "duckielib.cli", "bench", "sim"],
+        [sys.executable, "-m", "duckielib.tools.cli", "bench", "sim"],
         capture_output=True,
         text=True,
         check=True,

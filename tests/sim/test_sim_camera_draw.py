@@ -15,7 +15,8 @@ import pytest
 from PIL import Image
 
 from duckielib.errors import SimulationError
-from duckielib.sim import Simulator, draw
+from duckielib.plots import world as draw
+from duckielib.sim import Simulator
 
 
 def test_frame_is_a_640x480_jpeg():

@@ -6,10 +6,10 @@ each frame on ``~image/compressed``, so a laptop can watch it (``rqt_image_view`
 it in a bag. The launch file starts it only with ``camera:=true`` (the default).
 
 ``roslaunch`` starts it (see ``launch/course.launch``); the code is
-``duckielib.robot.camera_republisher_main``.
+``duckielib.nodes.mains.camera_republisher_main``.
 """
 
-from duckielib.robot import camera_republisher_main
+from duckielib.nodes.mains import camera_republisher_main
 
 if __name__ == "__main__":
     camera_republisher_main()

@@ -7,11 +7,11 @@ request, asks the robot's LED emitter (``led_emitter_node/set_pattern``) to show
 The mission node calls it at each change of state.
 
 ``roslaunch`` starts it (see ``launch/course.launch``); the code is
-``duckielib.robot.light_service_main``, and your solution is the file ``DUCKIE_SOLUTION``
+``duckielib.nodes.mains.light_service_main``, and your solution is the file ``DUCKIE_SOLUTION``
 names.
 """
 
-from duckielib.robot import light_service_main
+from duckielib.nodes.mains import light_service_main
 
 if __name__ == "__main__":
     light_service_main()

@@ -10,11 +10,11 @@ Private parameters (set by ``launch/course.launch``): ``~mission`` (``square_the
 ``d_shape``, ``straight`` or ``rotation``) and ``~stop_color`` (the LED colour of the stops,
 ``RED`` by default); the launch file also passes them as ``--mission`` and ``--stop-color``.
 
-``roslaunch`` starts it; the code is ``duckielib.robot.mission_main``, and your solution is
+``roslaunch`` starts it; the code is ``duckielib.nodes.mains.mission_main``, and your solution is
 the file ``DUCKIE_SOLUTION`` names.
 """
 
-from duckielib.robot import mission_main
+from duckielib.nodes.mains import mission_main
 
 if __name__ == "__main__":
     mission_main()

@@ -8,10 +8,10 @@ your ``WheelPairing`` and ``estimate_pose``, and publishes the pose they compute
 (``/ROBOT/odometry_node/pose``, a ``duckietown_msgs/Pose2DStamped``).
 
 ``roslaunch`` starts it (see ``launch/course.launch``); the code is
-``duckielib.robot.odometry_main``, and your solution is the file ``DUCKIE_SOLUTION`` names.
+``duckielib.nodes.mains.odometry_main``, and your solution is the file ``DUCKIE_SOLUTION`` names.
 """
 
-from duckielib.robot import odometry_main
+from duckielib.nodes.mains import odometry_main
 
 if __name__ == "__main__":
     odometry_main()

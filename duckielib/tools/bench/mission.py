@@ -24,13 +24,13 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Iterator, List, Tuple
 
-from duckielib import runner
 from duckielib.messages.message import Message
 from duckielib.missions import mission_named
 from duckielib.ros.modules import modules_installed
-from duckielib.runner import run_mission
 from duckielib.sim.simulator import Simulator
 from duckielib.solution import MISSION_PARTS, load_solution
+from duckielib.tools import runner
+from duckielib.tools.runner import run_mission
 
 _RUNS = 3
 

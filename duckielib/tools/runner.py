@@ -9,7 +9,8 @@ what happened to a folder::
     trajectory.png    the path on the mat and x, y, theta over time, odometry against truth
     mission.gif       the same path, animated
     summary.json      the states with their LED colours and times, the final poses, the
-                      distance to the start, the real-time factor (see :mod:`duckielib.behaviour`)
+                      distance to the start, the real-time factor
+                      (see :mod:`duckielib.bags.behaviour`)
     log.txt           every node's log
 
 ``duckie mission`` and ``make run`` call it with the reference solution (the export of
@@ -32,7 +33,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
-from duckielib.behaviour import DONE, MissionReport, mission_report
+from duckielib.bags.behaviour import DONE, MissionReport, mission_report
 from duckielib.errors import DuckielibError
 from duckielib.missions import Mission, mission_named
 from duckielib.solution import (
@@ -83,7 +84,7 @@ class MissionRun:
     """A finished run.
 
     Attributes:
-        report: what the robot did, from the bag (:class:`~duckielib.behaviour.MissionReport`).
+        report: what the robot did, from the bag (:class:`~duckielib.bags.behaviour.MissionReport`).
         summary: the content of ``summary.json``.
         folder: where the files are.
         files: the files written, by name (``"bag"``, ``"trajectory"``, ...).

@@ -5,8 +5,8 @@ turns into an image for the robot. Its nodes are thin: the code they run is duck
 the student's. :func:`prepare` (``duckie robot prepare``, ``make robot``) writes both into the
 project's ``deploy/`` folder, which the image copies to ``/code/course``::
 
-    deploy/duckielib/   the robot-deployable modules listed in pyproject.toml
-                        ([tool.duckielib] robot-modules): Python 3.8, standard library and numpy
+    deploy/duckielib/   the robot-deployable modules: all of duckielib but its laptop
+                        packages (LAPTOP_PACKAGES); Python 3.8, standard library and numpy
     deploy/solution.py  the solution the nodes run (the image's DUCKIE_SOLUTION names it)
     deploy/msgs/        genpy's duckietown_msgs and std_srvs, for running the nodes on this
                         laptop against a real ROS master (left out of the image: the robot has
@@ -16,7 +16,7 @@ The solution is checked before anything is written: it must load with every part
 runs (:data:`~duckielib.solution.MISSION_PARTS`) and parse as Python 3.8, the robot's Python.
 The old ``deploy/`` is replaced only once the new one is complete.
 
-Laptop side (reads pyproject.toml with tomllib: Python 3.11); never deployed.
+Laptop side; never deployed.
 """
 
 from __future__ import annotations
@@ -27,8 +27,6 @@ import shutil
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional, Union
-
-import tomllib
 
 from duckielib.config import PROJECT_ROOT
 from duckielib.errors import DuckielibError
@@ -43,6 +41,7 @@ from duckielib.solution import (
 
 __all__ = [
     "GENERATED",
+    "LAPTOP_PACKAGES",
     "PROJECT",
     "ROBOT_PYTHON",
     "ROOT",
@@ -53,6 +52,12 @@ __all__ = [
 
 #: The course's repository: the folder that holds ``duckielib/`` and ``pyproject.toml``.
 ROOT = PROJECT_ROOT
+
+#: The packages of ``duckielib/`` that stay on the laptop: the simulator (pymunk), bags
+#: (rosbags), plots (matplotlib), the tools (the ``duckie`` command and what it runs) and
+#: JupyterLab's settings. Everything else in ``duckielib/`` is deployed to the robot, so it
+#: must run on Python 3.8 with the standard library and numpy only (the tests check it).
+LAPTOP_PACKAGES = ("bags", "lab", "plots", "sim", "tools")
 
 #: The Duckietown project for the robot.
 PROJECT = ROOT / "robot_nodes"
@@ -119,19 +124,6 @@ def _shown(path: Path) -> str:
         return str(path)
 
 
-def _robot_module_entries() -> List[str]:
-    pyproject = ROOT / "pyproject.toml"
-    try:
-        config = tomllib.loads(pyproject.read_text(encoding="utf-8"))
-        entries = config["tool"]["duckielib"]["robot-modules"]
-    except (OSError, tomllib.TOMLDecodeError, KeyError) as error:
-        raise DuckielibError(
-            f"Cannot read the robot modules from {pyproject} ({error}); duckie robot prepare "
-            "runs in the course's repository, where pyproject.toml lists them."
-        ) from None
-    return [str(entry) for entry in entries]
-
-
 def _deployed(path: Path) -> bool:
     if "__pycache__" in path.parts or not path.is_file():
         return False
@@ -141,28 +133,15 @@ def _deployed(path: Path) -> bool:
 def robot_module_files() -> List[Path]:
     """The files of the robot-deployable modules, relative to the repository.
 
-    They are the ``.py`` files of the entries of pyproject.toml's ``[tool.duckielib]
-    robot-modules`` (files or folders), the message definitions' text files under them, and
-    ``duckielib/py.typed``.
-
-    Raises:
-        DuckielibError: if pyproject.toml cannot be read or lists something that is missing.
+    They are every ``.py`` file of ``duckielib/`` outside :data:`LAPTOP_PACKAGES`, the message
+    definitions' text files, and ``duckielib/py.typed``.
     """
-    files = set()
-    for entry in _robot_module_entries():
-        path = ROOT / entry
-        if path.is_dir():
-            files.update(found for found in path.rglob("*") if _deployed(found))
-        elif path.is_file():
-            files.add(path)
-        else:
-            raise DuckielibError(
-                f"pyproject.toml lists the robot module {entry}, which does not exist; "
-                "write it or take it off the list."
-            )
-    marker = ROOT / "duckielib" / _TYPED_MARKER
-    if marker.is_file():
-        files.add(marker)
+    library = ROOT / "duckielib"
+    files = [
+        path
+        for path in library.rglob("*")
+        if _deployed(path) and path.relative_to(library).parts[0] not in LAPTOP_PACKAGES
+    ]
     return sorted(path.relative_to(ROOT) for path in files)
 
 
@@ -253,8 +232,7 @@ def prepare(
     Raises:
         SolutionError: if the solution lacks a part the robot runs, has one unfinished, or
             uses syntax newer than Python 3.8 (nothing is written then).
-        DuckielibError: if ``project`` is not a Duckietown project, or pyproject.toml lists
-            a robot module that does not exist.
+        DuckielibError: if ``project`` is not a Duckietown project.
     """
     project = PROJECT if project is None else Path(project)
     if not ((project / ".dtproject").is_file() and (project / "Dockerfile").is_file()):
@@ -264,7 +242,6 @@ def prepare(
         )
     source, origin = _solution_source(solution)
     _check_robot_python(source, "the reference solution" if solution is None else str(solution))
-    robot_module_files()  # fails on a missing module before anything is written
 
     deploy, new = project / GENERATED[0], project / GENERATED[1]
     if new.exists():

@@ -20,7 +20,7 @@ __all__ = ["main"]
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from duckielib.bench import benchmarks, run_benchmark
+    from duckielib.tools.bench import benchmarks, run_benchmark
 
     if args.name is None:
         for name, (_, description) in sorted(benchmarks().items()):
@@ -119,7 +119,7 @@ def _export(args: argparse.Namespace) -> int:
 
 
 def _handin(args: argparse.Namespace) -> int:
-    from duckielib.handin import handin, handin_notebooks
+    from duckielib.tools.handin import handin, handin_notebooks
 
     count = len(handin_notebooks(args.folder, args.output))
     print(
@@ -155,7 +155,7 @@ def _add_handin(commands: argparse._SubParsersAction) -> None:
 
 
 def _mission(args: argparse.Namespace) -> int:
-    from duckielib.runner import run_mission
+    from duckielib.tools.runner import run_mission
 
     if args.solution is None:
         print("Using the reference solution (the export of solutions/).", flush=True)
@@ -173,7 +173,7 @@ def _mission(args: argparse.Namespace) -> int:
 
 
 def _robot_prepare(args: argparse.Namespace) -> int:
-    from duckielib.robot_project import prepare
+    from duckielib.tools.deploy import prepare
 
     prepare(solution=args.solution, project=args.project)
     return 0

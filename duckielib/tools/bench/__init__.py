@@ -19,23 +19,23 @@ __all__ = ["BENCHMARKS", "benchmarks", "run_benchmark"]
 #: adds those other packages register (the grader's ``grade``).
 BENCHMARKS: Dict[str, Tuple[str, str]] = {
     "messages": (
-        "duckielib.bench.messages",
+        "duckielib.tools.bench.messages",
         "build, serialize and read back the course's messages",
     ),
     "graph": (
-        "duckielib.bench.graph",
+        "duckielib.tools.bench.graph",
         "real-time factor of the virtual Duckiebot with a controller and a listener node",
     ),
     "sim": (
-        "duckielib.bench.sim",
+        "duckielib.tools.bench.sim",
         "real-time factor of the simulator alone (60 s drive, encoders and LEDs on)",
     ),
     "mission": (
-        "duckielib.bench.mission",
+        "duckielib.tools.bench.mission",
         "real-time factor of the whole square-then-circle mission (nodes, odometry, bag)",
     ),
     "bags": (
-        "duckielib.bench.bags",
+        "duckielib.tools.bench.bags",
         "odometry replayed from a 100,000-message encoder bag, and Debian's rosbag reading it",
     ),
 }

@@ -9,7 +9,7 @@ those processes' mains. Each takes the real rospy, loads the solution named by t
 - :func:`odometry_main`: the library's odometry node, driven by the student's functions;
 - :func:`light_service_main`: the student's light service node (notebook 08);
 - :func:`mission_main`: the student's mission node (notebook 09), inside a
-  :class:`~duckielib.safety.SafetyGuard` that stops the wheels however the mission ends;
+  :class:`~duckielib.nodes.safety.SafetyGuard` that stops the wheels however the mission ends;
 - :func:`camera_republisher_main`: the camera's images, republished for the laptop.
 
 A problem with the solution (missing, unfinished) ends the node at once with one sentence on
@@ -109,7 +109,7 @@ def mission_main(argv: Optional[List[str]] = None) -> None:
 
     Exit status 0 when the mission announced its end, 1 when it failed.
     """
-    from duckielib.safety import SafetyGuard, guarded_init
+    from duckielib.nodes.safety import SafetyGuard, guarded_init
     from duckielib.solution import MISSION_PARTS
 
     rospy = _real_rospy("mission_node")
