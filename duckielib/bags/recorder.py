@@ -33,7 +33,9 @@ from typing import Any, Deque, Dict, Iterable, Optional, Tuple
 from duckielib.bags.io import BagWriter, PathLike
 from duckielib.errors import BagError
 from duckielib.ros import names
-from duckielib.ros.graph import ERROR, Graph, default_graph, node_context
+from duckielib.ros.context import node_context
+from duckielib.ros.graph import Graph, default_graph
+from duckielib.ros.log import ERROR
 from duckielib.ros.rospy import AnyMsg, Subscriber
 
 __all__ = ["BagRecorder", "record"]

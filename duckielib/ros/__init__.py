@@ -10,14 +10,24 @@ A node written for a real Duckiebot runs here unchanged::
     graph.run(5.0)           # five simulated seconds, in a fraction of a real one
 
 See :mod:`duckielib.ros.rospy` for the API and :mod:`duckielib.ros.graph` for how the graph
-schedules nodes deterministically.
+schedules nodes deterministically. The layers, each importing only those below it:
+
+- :mod:`~duckielib.ros.names`, :mod:`~duckielib.ros.exceptions`, :mod:`~duckielib.ros.log`:
+  ROS names, rospy's exceptions, log levels and lines;
+- :mod:`~duckielib.ros.context`: which node is calling, per thread;
+- :mod:`~duckielib.ros.node`: a node and the topic and service records (it knows its graph
+  only through the few things it asks of it);
+- :mod:`~duckielib.ros.graph`: the master, parameter server, clock and scheduler;
+- :mod:`~duckielib.ros.rospy` and :mod:`~duckielib.ros.introspect`: rospy's API and the
+  ``rostopic``-like tools on top.
 """
 
 from __future__ import annotations
 
 from duckielib.ros import rospy
-from duckielib.ros.graph import Graph, LogRecord, NodeCrashed, default_graph
+from duckielib.ros.graph import Graph, NodeCrashed, default_graph
 from duckielib.ros.introspect import rosmsg, rosnode, rosparam, rosservice, rossrv, rostopic
+from duckielib.ros.log import LogRecord
 from duckielib.ros.modules import install_modules, uninstall_modules
 
 __all__ = [

@@ -26,12 +26,13 @@ import heapq
 import itertools
 import sys
 import threading
-import traceback
-from typing import Any, Callable, Dict, Iterator, List, Optional, TextIO, Tuple
+from typing import Any, Callable, Dict, List, Optional, TextIO, Tuple
 
 from duckielib.errors import DuckielibError
-from duckielib.ros import names
-from duckielib.ros.exceptions import ROSException, ROSInitException, ROSInterruptException
+from duckielib.ros import context, names
+from duckielib.ros.exceptions import ROSException, ROSInterruptException
+from duckielib.ros.log import ERROR, INFO, LEVEL_NAMES, LogRecord, format_error
+from duckielib.ros.node import Node, ServiceRecord, TopicRecord
 from duckielib.rostime import NS_PER_S
 
 try:  # optional, so the module stays pure (standard library only) where it is missing
@@ -39,15 +40,11 @@ try:  # optional, so the module stays pure (standard library only) where it is m
 except ImportError:  # pragma: no cover - the course's environment installs it
     _greenlet = None
 
-__all__ = ["Graph", "LogRecord", "NodeCrashed", "default_graph", "DEBUG", "INFO", "WARN", "ERROR"]
+__all__ = ["Graph", "NodeCrashed", "copy_tree", "current_graph", "default_graph"]
 
-DEBUG, INFO, WARN, ERROR, FATAL = 1, 2, 4, 8, 16
-LEVEL_NAMES = {DEBUG: "DEBUG", INFO: "INFO", WARN: "WARN", ERROR: "ERROR", FATAL: "FATAL"}
 #: How many times a node may be resumed after shutdown before the graph gives up on it.
 _SHUTDOWN_PATIENCE = 1000
 
-_local = threading.local()
-_default: List[Graph] = []
 #: Launched nodes' greenlets that have started and not finished. Kept alive so that a graph
 #: dropped without a shutdown leaves its nodes parked for good, as threads would be, instead
 #: of running their clean-up code at some garbage collection.
@@ -65,21 +62,6 @@ class NodeCrashed(DuckielibError):
     def __init__(self, message: str, node: str = "") -> None:
         super().__init__(message)
         self.node = node
-
-
-class LogRecord:
-    """One logged line: simulated time (s), level, node name and text."""
-
-    __slots__ = ("level", "node", "text", "time")
-
-    def __init__(self, time: float, level: int, node: str, text: str) -> None:
-        self.time = time
-        self.level = level
-        self.node = node
-        self.text = text
-
-    def __repr__(self) -> str:
-        return f"[{LEVEL_NAMES[self.level]}] [{self.time:.3f}] [{self.node}]: {self.text}"
 
 
 class _Event:
@@ -139,7 +121,7 @@ class _Actor:
         self.args = args
         self.kwargs = kwargs
         self.launch = launch
-        self.node: Any = None
+        self.node: Optional[Node] = None
         self.wake = _Signal()
         self.finished = False
         self.error: Optional[BaseException] = None
@@ -149,7 +131,7 @@ class _Actor:
         self.resumes_after_shutdown = 0
         #: A Ctrl-C that reached the node's code (greenlets run in the driving thread).
         self.interrupt: Optional[KeyboardInterrupt] = None
-        self.stack: List[Any] = []  # the nodes whose callbacks run inside this node's code
+        self.stack: List[Node] = []  # the nodes whose callbacks run inside this node's code
         self.label = launch.get("name") or getattr(target, "__name__", "node")
         self.thread: Optional[threading.Thread] = None
         self.greenlet: Any = None
@@ -166,8 +148,7 @@ class _Actor:
 
     def _main(self) -> None:
         self.wake.wait()
-        _local.actor = self
-        _local.stack = self.stack
+        context.enter_actor(self)
         try:
             self._run()
         finally:
@@ -232,12 +213,12 @@ class Graph:
         self._polled = 0
         self._shutdowns = False
         self._actors: List[_Actor] = []
-        self._foreground: Dict[int, Any] = {}
+        self._foreground: Dict[int, Node] = {}
         self._anonymous = itertools.count(1)
         self._crash: Optional[Tuple[str, BaseException]] = None
-        self.nodes: Dict[str, Any] = {}
-        self.topics: Dict[str, Any] = {}
-        self.services: Dict[str, Any] = {}
+        self.nodes: Dict[str, Node] = {}
+        self.topics: Dict[str, TopicRecord] = {}
+        self.services: Dict[str, ServiceRecord] = {}
         self.params: Dict[str, Any] = {}
         #: Values read by ``rospy.get_param_cached``, by (node, name); emptied on any change.
         self.param_cache: Dict[Tuple[str, str], Any] = {}
@@ -246,7 +227,7 @@ class Graph:
         self.stderr = stderr
         self.echo_logs = echo_logs
         self.is_shutdown = False
-        _default[:] = [self]
+        context.make_latest(self)
 
     # -- clock ------------------------------------------------------------------------------
     @property
@@ -304,7 +285,7 @@ class Graph:
 
     def _drive(self, stop_ns: Optional[int], predicate: Optional[Callable[[], bool]]) -> bool:
         me = threading.get_ident()
-        if getattr(_local, "actor", None) is not None:
+        if context.calling_actor() is not None:
             raise ROSException("A node launched on the graph cannot drive it; use rospy.sleep().")
         if self._driver not in (None, me):
             raise ROSException("Another thread is already running this graph.")
@@ -416,18 +397,9 @@ class Graph:
                 f"Node {actor.name} runs in the thread that first drove this graph; drive the "
                 "graph from that thread (or create it with Graph(threads=True))."
             )
-        state = _local.__dict__
-        saved = state.get("actor"), state.get("stack")
-        _local.actor, _local.stack = actor, actor.stack
-        actor.greenlet.parent = _greenlet.getcurrent()  # where the node hands the baton back to
-        try:
+        with context.acting_as(actor):
+            actor.greenlet.parent = _greenlet.getcurrent()  # where the node hands the baton back
             actor.greenlet.switch()
-        finally:
-            for key, value in zip(("actor", "stack"), saved):
-                if value is None:
-                    state.pop(key, None)
-                else:
-                    state[key] = value
 
     def _hand_over(self, actor: _Actor) -> None:
         """Hand the baton to ``actor``'s thread and wait until it hands it back."""
@@ -491,7 +463,7 @@ class Graph:
         """
         if predicate():
             return True
-        actor = getattr(_local, "actor", None)
+        actor = context.calling_actor()
         if actor is None:
             if self._drive(deadline_ns, predicate):
                 return True
@@ -520,10 +492,10 @@ class Graph:
     # -- nodes ------------------------------------------------------------------------------
     def current_actor(self) -> Optional[_Actor]:
         """The launched node whose code is calling, if any."""
-        actor = getattr(_local, "actor", None)
+        actor = context.calling_actor()
         return actor if actor is not None and actor.graph is self else None
 
-    def foreground_node(self) -> Any:
+    def foreground_node(self) -> Optional[Node]:
         """The node the calling (non-launched) thread created with ``rospy.init_node``."""
         return self._foreground.get(threading.get_ident())
 
@@ -531,7 +503,7 @@ class Graph:
         """A deterministic suffix for anonymous node names."""
         return f"_{next(self._anonymous)}"
 
-    def add_node(self, node: Any) -> None:
+    def add_node(self, node: Node) -> None:
         """Register a node; a node already registered under that name is shut down, as in ROS."""
         old = self.nodes.get(node.name)
         if old is not None and not old.is_shutdown:
@@ -543,7 +515,7 @@ class Graph:
         else:
             self._foreground[threading.get_ident()] = node
 
-    def host_node(self, name: str, namespace: str = "/") -> Any:
+    def host_node(self, name: str, namespace: str = "/") -> Node:
         """Register a node whose work is all done in callbacks, with no main code to run.
 
         The robot's drivers are such nodes. Create their publishers, subscribers and services
@@ -552,8 +524,6 @@ class Graph:
         Raises:
             ValueError: if ``name`` is not a legal base name.
         """
-        from duckielib.ros.node import Node
-
         if not names.is_legal_base_name(name):
             raise ValueError(f"{name!r} is not a legal node name: use letters, digits and '_'.")
         node = Node(self, name, namespace)
@@ -563,7 +533,7 @@ class Graph:
         self.nodes[node.name] = node
         return node
 
-    def remove_node(self, node: Any) -> None:
+    def remove_node(self, node: Node) -> None:
         """Forget a node that shut down.
 
         The code that ran it still sees it (shut down), so ``rospy.is_shutdown()`` stays true.
@@ -578,7 +548,7 @@ class Graph:
         command to the wheels) is delivered while the other nodes (the robot's drivers, a
         recorder) still run, as on a robot whose drivers outlive the course's nodes.
         """
-        driving = getattr(_local, "actor", None) is None and self._driver in (
+        driving = context.calling_actor() is None and self._driver in (
             None,
             threading.get_ident(),
         )
@@ -682,11 +652,6 @@ class Graph:
         print(f"[{LEVEL_NAMES[level]}] [{self.time:.3f}] [{node}]: {text}", file=stream)
 
 
-def format_error(error: BaseException) -> str:
-    """An exception with its traceback, as Python prints it, for the log."""
-    return "".join(traceback.format_exception(type(error), error, error.__traceback__)).rstrip()
-
-
 def copy_tree(value: Any) -> Any:
     """A copy of a parameter's value, down to its nested dicts and lists."""
     if isinstance(value, dict):
@@ -698,60 +663,16 @@ def copy_tree(value: Any) -> Any:
 
 def default_graph() -> Graph:
     """The graph created last (a new one if there is none yet)."""
-    if not _default:
-        Graph()
-    return _default[0]
-
-
-def current_node(required_by: str = "this call") -> Any:
-    """The node whose code is running: a callback's node, a launched node, or the caller's own.
-
-    Raises:
-        ROSInitException: if the calling code has not called ``rospy.init_node`` yet.
-    """
-    stack = getattr(_local, "stack", None)
-    if stack:
-        return stack[-1]
-    actor = getattr(_local, "actor", None)
-    if actor is not None:
-        if actor.node is None:
-            raise ROSInitException(
-                f"{required_by} needs a node: call rospy.init_node('name') first."
-            )
-        return actor.node
-    if _default:
-        node = _default[0].foreground_node()
-        if node is not None:
-            return node
-    raise ROSInitException(f"{required_by} needs a node: call rospy.init_node('name') first.")
+    graph = context.latest_graph()
+    return graph if graph is not None else Graph()
 
 
 def current_graph() -> Graph:
     """The graph of the calling node, or the default graph if the caller has no node yet."""
-    actor = getattr(_local, "actor", None)
+    actor = context.calling_actor()
     if actor is not None:
         return actor.graph
-    stack = getattr(_local, "stack", None)
+    stack = context.node_stack()
     if stack:
         return stack[-1].graph
     return default_graph()
-
-
-def node_stack() -> List[Any]:
-    """The calling thread's stack of nodes whose callbacks are running (innermost last)."""
-    try:
-        return _local.stack
-    except AttributeError:
-        _local.stack = []
-        return _local.stack
-
-
-@contextlib.contextmanager
-def node_context(node: Any) -> Iterator[Any]:
-    """Run code as ``node``: callbacks and service handlers run inside this context."""
-    stack = node_stack()
-    stack.append(node)
-    try:
-        yield node
-    finally:
-        stack.pop()

@@ -24,8 +24,9 @@ from duckielib import messages
 from duckielib.errors import UnknownTypeError
 from duckielib.messages.message import Message
 from duckielib.ros import names
+from duckielib.ros.context import node_context
 from duckielib.ros.exceptions import ROSException
-from duckielib.ros.graph import Graph, current_graph, node_context
+from duckielib.ros.graph import Graph, current_graph
 from duckielib.ros.node import Node
 
 __all__ = ["Printout", "Names", "rosmsg", "rosnode", "rosparam", "rosservice", "rossrv", "rostopic"]

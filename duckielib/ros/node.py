@@ -1,18 +1,39 @@
 """A node on the in-process graph, and the topic and service records the graph keeps.
 
 Node code never uses these classes directly: it calls rospy's functions
-(:mod:`duckielib.ros.rospy`), which find the calling node and act on it.
+(:mod:`duckielib.ros.rospy`), which find the calling node (:mod:`duckielib.ros.context`) and
+act on it. A node knows its graph only as a :class:`Host`: the few things it asks of it.
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple
 
 from duckielib.ros import names
+from duckielib.ros.context import node_context
 from duckielib.ros.exceptions import ROSException
-from duckielib.ros.graph import ERROR, INFO, Graph, format_error, node_context
+from duckielib.ros.log import ERROR, INFO, format_error
 
-__all__ = ["Node", "TopicRecord", "ServiceRecord"]
+if TYPE_CHECKING:
+    from typing import Protocol
+
+    class Host(Protocol):
+        """What a node needs of the graph it lives on."""
+
+        topics: Dict[str, TopicRecord]
+        services: Dict[str, ServiceRecord]
+
+        @property
+        def time(self) -> float: ...
+
+        def log_message(self, level: int, node: str, text: str) -> None: ...
+
+        def node_shut_down(self) -> None: ...
+
+        def remove_node(self, node: Node) -> None: ...
+
+
+__all__ = ["Node", "ServiceRecord", "TopicRecord"]
 
 
 class TopicRecord:
@@ -109,7 +130,7 @@ class Node:
 
     def __init__(
         self,
-        graph: Graph,
+        graph: Host,
         name: str,
         namespace: str,
         remappings: Optional[Dict[str, str]] = None,

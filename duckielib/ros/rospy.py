@@ -30,6 +30,7 @@ from duckielib import rostime
 from duckielib.errors import MessageError
 from duckielib.messages import Message
 from duckielib.ros import names
+from duckielib.ros.context import current_node, node_context, node_stack
 from duckielib.ros.exceptions import (
     ROSException,
     ROSInitException,
@@ -39,21 +40,10 @@ from duckielib.ros.exceptions import (
     ServiceException,
     TransportException,
 )
-from duckielib.ros.graph import (
-    DEBUG,
-    ERROR,
-    FATAL,
-    INFO,
-    NS_PER_S,
-    WARN,
-    copy_tree,
-    current_graph,
-    current_node,
-    format_error,
-    node_context,
-    node_stack,
-)
+from duckielib.ros.graph import copy_tree, current_graph
+from duckielib.ros.log import DEBUG, ERROR, FATAL, INFO, WARN, format_error
 from duckielib.ros.node import Node, ServiceRecord, TopicRecord
+from duckielib.rostime import NS_PER_S
 
 __all__ = [
     # nodes

@@ -22,7 +22,8 @@ from typing import Any, Callable, Dict, List, Optional, Union
 
 from duckielib.errors import ConfigError
 from duckielib.ros import names, rospy
-from duckielib.ros.graph import Graph, node_context
+from duckielib.ros.context import node_context
+from duckielib.ros.graph import Graph
 from duckielib.rostime import NS_PER_S
 from duckielib.sim import drivers
 from duckielib.sim.encoders import EncoderReading

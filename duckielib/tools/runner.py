@@ -321,7 +321,8 @@ def drive_and_record(
 
     from duckielib.bags import BagRecorder
     from duckielib.nodes import odometry_node
-    from duckielib.ros.graph import ERROR, Graph, NodeCrashed
+    from duckielib.ros.graph import Graph, NodeCrashed
+    from duckielib.ros.log import ERROR
     from duckielib.sim import VirtualDuckiebot
 
     graph = Graph(echo_logs=False)

@@ -18,7 +18,7 @@ from duckielib.bags.records import scan
 from duckielib.errors import BagError
 from duckielib.messages import String
 from duckielib.ros import Graph, rospy
-from duckielib.ros.graph import node_context
+from duckielib.ros.context import node_context
 from duckielib.sim import VirtualDuckiebot
 
 TRUTH = "/duckiebot/simulator_node/ground_truth_pose"

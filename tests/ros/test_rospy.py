@@ -528,7 +528,7 @@ def test_shutdown_hooks_run_and_close_the_node(graph):
 
 
 def test_graph_shutdown_delivers_what_launched_nodes_say_on_the_way_out(graph):
-    from duckielib.ros.graph import node_context
+    from duckielib.ros.context import node_context
 
     heard = []
     with node_context(graph.host_node("wheels_driver")):  # a driver: callbacks only

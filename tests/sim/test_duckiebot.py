@@ -25,7 +25,8 @@ from duckielib.messages import (
     WheelsCmdStamped,
 )
 from duckielib.ros import Graph, modules, rosnode, rosparam, rospy, rosservice, rostopic
-from duckielib.ros.graph import ERROR, node_context
+from duckielib.ros.context import node_context
+from duckielib.ros.log import ERROR
 from duckielib.sim import VirtualDuckiebot
 from duckielib.tools.bench import run_benchmark
 
