@@ -15,9 +15,10 @@ schedules nodes deterministically. The layers, each importing only those below i
 - :mod:`~duckielib.ros.names`, :mod:`~duckielib.ros.exceptions`, :mod:`~duckielib.ros.log`:
   ROS names, rospy's exceptions, log levels and lines;
 - :mod:`~duckielib.ros.context`: which node is calling, per thread;
+  :mod:`~duckielib.ros.params`: the parameter server;
 - :mod:`~duckielib.ros.node`: a node and the topic and service records (it knows its graph
   only through the few things it asks of it);
-- :mod:`~duckielib.ros.graph`: the master, parameter server, clock and scheduler;
+- :mod:`~duckielib.ros.graph`: the master, its clock and scheduler;
 - :mod:`~duckielib.ros.rospy` and :mod:`~duckielib.ros.introspect`: rospy's API and the
   ``rostopic``-like tools on top.
 """

@@ -40,9 +40,10 @@ from duckielib.ros.exceptions import (
     ServiceException,
     TransportException,
 )
-from duckielib.ros.graph import copy_tree, current_graph
+from duckielib.ros.graph import current_graph
 from duckielib.ros.log import DEBUG, ERROR, FATAL, INFO, WARN, format_error
 from duckielib.ros.node import Node, ServiceRecord, TopicRecord
+from duckielib.ros.params import copy_tree
 from duckielib.rostime import NS_PER_S
 
 __all__ = [
