@@ -26,6 +26,7 @@ from duckielib.config import DB21
 from duckielib.errors import BagError
 from duckielib.missions import TASK_START
 from duckielib.odometry import Odometry
+from duckielib.rostime import NS_PER_S
 
 __all__ = [
     "EncoderStream",
@@ -75,7 +76,7 @@ def _choose_times(
             raise BagError(f"Every header stamp on {topic} is 0; use time_base='record'.")
         return record_ns, "record", notes
     if len(stamp_ns):
-        skew = np.abs(stamp_ns.astype(np.float64) - record_ns) / 1e9
+        skew = np.abs(stamp_ns.astype(np.float64) - record_ns) / NS_PER_S
         if skew.max() > SKEW_NOTE_S:
             notes.append(
                 f"{topic}: header stamps differ from record times by {np.median(skew):.3f} s "
@@ -131,7 +132,7 @@ def _numeric_leaves(message: Any, prefix: str = "") -> Dict[str, float]:
         if isinstance(value, (bool, int, float)):
             leaves[key] = value
         elif hasattr(value, "to_nsec"):
-            leaves[key] = value.to_nsec() / 1e9
+            leaves[key] = value.to_nsec() / NS_PER_S
         elif hasattr(value, "__slots__"):
             leaves.update(_numeric_leaves(value, key + "."))
     return leaves
@@ -166,10 +167,10 @@ def read_topic(bag: Union[Bag, PathLike], topic: str, time_base: str = "auto") -
     return TopicArrays(
         topic=topic,
         type=info.type,
-        t=times / 1e9,
+        t=times / NS_PER_S,
         time_base=base,
-        record_t=record_ns / 1e9,
-        stamp_t=None if stamp_ns is None else stamp_ns / 1e9,
+        record_t=record_ns / NS_PER_S,
+        stamp_t=None if stamp_ns is None else stamp_ns / NS_PER_S,
         fields=fields,
         notes=notes,
     )
@@ -230,7 +231,7 @@ def _decode_encoders(raw: Sequence[Tuple[str, int, bytes]]) -> Tuple[np.ndarray,
         _, secs, nsecs, frame_length = header(data, 0)
         value, res, _ = tail(data, 16 + frame_length)
         record_ns[index] = time_ns
-        stamp_ns[index] = secs * 1_000_000_000 + nsecs
+        stamp_ns[index] = secs * NS_PER_S + nsecs
         ticks[index] = value
         resolution[index] = res
     return record_ns, stamp_ns, ticks, resolution
@@ -277,7 +278,9 @@ def read_encoders(
         times, chosen, notes = _choose_times(topic, record_ns, stamp_ns, base)
         order = np.argsort(times, kind="stable")
         streams.append(
-            EncoderStream(topic, times[order] / 1e9, ticks[order], resolution[order], chosen, notes)
+            EncoderStream(
+                topic, times[order] / NS_PER_S, ticks[order], resolution[order], chosen, notes
+            )
         )
     return streams[0], streams[1]
 

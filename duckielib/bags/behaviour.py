@@ -23,6 +23,7 @@ from duckielib.bags.analysis import PoseTrack, pose_tracks
 from duckielib.bags.io import Bag, PathLike
 from duckielib.leds import PATTERNS
 from duckielib.missions import Mission, Pose
+from duckielib.rostime import NS_PER_S
 
 __all__ = [
     "CLOSURE_TOLERANCE_M",
@@ -194,7 +195,7 @@ def _led_changes(bag: Bag, topic: str) -> List[Tuple[float, str]]:
     the stamps are used unless every one is 0 (an emitter that does not stamp).
     """
     records = [
-        (item.time, item.message.header.stamp.to_nsec() / 1e9, _pattern_name(item.message))
+        (item.time, item.message.header.stamp.to_nsec() / NS_PER_S, _pattern_name(item.message))
         for item in bag.read(topic)
     ]
     stamped = any(stamp for _, stamp, _ in records)

@@ -15,6 +15,7 @@ from typing import Dict, Optional
 from duckielib.bags import records
 from duckielib.bags.io import BagWriter, PathLike
 from duckielib.errors import BagError
+from duckielib.rostime import NS_PER_S
 
 __all__ = ["RepairReport", "repair_bag"]
 
@@ -53,7 +54,9 @@ class RepairReport:
             f"from {self.source} into {self.output}.",
         ]
         if self.messages:
-            lines.append(f"Record times: {self.start_ns / 1e9:.3f} s to {self.end_ns / 1e9:.3f} s.")
+            lines.append(
+                f"Record times: {self.start_ns / NS_PER_S:.3f} s to {self.end_ns / NS_PER_S:.3f} s."
+            )
         for topic, count in sorted(self.counts.items()):
             lines.append(f"  {topic}: {count} messages")
         if self.was_indexed and self.damage is None:

@@ -209,7 +209,7 @@ class Rate:
         if not hz > 0:
             raise ValueError(f"rospy.Rate needs a positive frequency in Hz, not {hz!r}.")
         self.last_time = get_rostime()
-        self.sleep_dur = Duration(0, int(1e9 / hz))
+        self.sleep_dur = Duration(0, int(NS_PER_S / hz))
         self._reset = reset
 
     def _remaining(self, curr_time: Time) -> Duration:

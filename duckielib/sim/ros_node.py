@@ -175,7 +175,9 @@ class VirtualDuckiebotNode:
                 self.sim.run_until(t_ns / NS_PER_S)
                 readings = self.sim.pop_encoder_readings()
             self._publish_clock(t_ns)
-            muted = self.mute_encoders_after is not None and t_ns >= self.mute_encoders_after * 1e9
+            muted = (
+                self.mute_encoders_after is not None and t_ns >= self.mute_encoders_after * NS_PER_S
+            )
             for reading in [] if muted else readings:
                 self.drivers[f"{reading.wheel}_wheel_encoder_node"].publish(reading)
             if t_ns >= next_frame_ns:
