@@ -95,16 +95,15 @@ def unit_user() -> int:
 def _readonly_paths() -> List[str]:
     """What the sandbox sees read-only: the system, Python, the library, the robot project.
 
-    Notebook 11 reads the course's robot project (``robot_nodes/``) and prepares a copy of it,
-    which reads the list of robot modules in ``pyproject.toml``, as students do.
+    Notebook 11 reads the course's robot project (``robot_nodes/``) and prepares a copy of it
+    with the library's robot modules, as students do.
     """
     import duckielib
-    from duckielib.tools.deploy import PROJECT, ROOT
+    from duckielib.tools.deploy import PROJECT
 
     paths = ["/usr", "/etc", sys.prefix, sys.base_prefix]
     library = Path(duckielib.__file__).resolve().parent
     paths += [str(library), str(Path(__file__).resolve().parent), str(PROJECT)]
-    paths.append(str(ROOT / "pyproject.toml"))
     real_python = Path(sys.executable).resolve().parent.parent
     paths.append(str(real_python))
     unique: List[str] = []
