@@ -50,7 +50,20 @@ _numbers = itertools.count(1)
 
 
 class _Recording(Subscriber):
-    """A subscription of ``rosbag record``: keeps each message's bytes as published."""
+    """A subscription of ``rosbag record``: keeps each message's bytes as published.
+
+    This class is the recorder's only tie to the internals of
+    :class:`duckielib.ros.rospy.Subscriber`, which has no public way to take a message's bytes
+    as it is published. It relies on two private names (``tests/bags/test_recorder_seam.py``
+    checks both):
+
+    - ``Subscriber._enqueue(self, data: bytes) -> None``, overridden here: rospy calls it with
+      each message's serialized bytes, within ``publish()``, and from ``Subscriber.__init__``
+      with the topic's latched messages. The base method queues them for a callback; a
+      recording has none, so it neither queues nor decodes.
+    - ``Subscriber._record``: the topic's record (its ``name`` and ``connection_header()``),
+      set before the latched messages arrive and None once unsubscribed.
+    """
 
     def __init__(self, topic: str, recorder: BagRecorder) -> None:
         # First: a latched message arrives while subscribing.
@@ -61,7 +74,7 @@ class _Recording(Subscriber):
         self._connection: Any = None
         super().__init__(topic, AnyMsg, queue_size=None)
 
-    def _enqueue(self, data: bytes) -> None:
+    def _enqueue(self, data: bytes) -> None:  # overrides rospy's private method: see above
         connection = self._connection
         if connection is None:
             if self._record is None:
