@@ -33,6 +33,7 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from duckielib import messages as course_messages
 from duckielib.bags import records
 from duckielib.errors import BagError, UnknownTypeError
+from duckielib.rostime import NS_PER_S
 
 __all__ = [
     "Bag",
@@ -158,7 +159,7 @@ class RosbagsSeam:
                 index[connection.id].append((time_ns, out.tell()))
                 first = min(first, time_ns)
                 last = max(last, time_ns)
-                secs, nsecs = divmod(time_ns, 1_000_000_000)
+                secs, nsecs = divmod(time_ns, NS_PER_S)
                 out.write(start + pack(secs, nsecs, len(data)))
                 out.write(data)
                 written += 1
@@ -357,7 +358,7 @@ class BagMessage:
     @property
     def time(self) -> float:
         """The record time, in seconds."""
-        return self.time_ns / 1e9
+        return self.time_ns / NS_PER_S
 
 
 def _unindexed_advice(path: Path) -> str:
@@ -446,8 +447,8 @@ class Bag:
             f"path:        {self.path}",
             "version:     2.0",
             f"duration:    {self.duration:.1f}s",
-            f"start:       {self.start_ns / 1e9:.2f} s",
-            f"end:         {self.end_ns / 1e9:.2f} s",
+            f"start:       {self.start_ns / NS_PER_S:.2f} s",
+            f"end:         {self.end_ns / NS_PER_S:.2f} s",
             f"size:        {_human_size(size)}",
             f"messages:    {self.message_count}",
             f"compression: {self.compression} [{self.chunk_count} chunks]",
@@ -468,7 +469,7 @@ class Bag:
     @property
     def duration(self) -> float:
         """Seconds from the first to the last message."""
-        return (self.end_ns - self.start_ns) / 1e9
+        return (self.end_ns - self.start_ns) / NS_PER_S
 
     def topic(self, name: str) -> TopicInfo:
         """The topic ``name``.
