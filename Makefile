@@ -14,9 +14,10 @@ LAB_ARGS ?=
 LAB_DIR ?= $(CURDIR)
 
 # Debian's ROS 1 (rospy, roscore, rosbag, genpy, message packages), bubblewrap, the sandbox
-# the autograder runs student code in, and Chromium, the browser the JupyterLab tests drive.
+# the autograder runs student code in, Chromium, the browser the JupyterLab tests drive, and
+# ffmpeg, which writes animations as MP4.
 ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-genpy \
-	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv chromium
+	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv chromium ffmpeg
 
 .PHONY: help run test lab robot ros lint format bench lock clean
 

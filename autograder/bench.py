@@ -116,7 +116,8 @@ def filled_notebook(
 
 def _fill(notebook: NotebookNode, name: str, answers: Mapping[Tuple[str, str], str]) -> None:
     for cell in notebook.cells:
-        answer = answers.get((name, _grade_id(cell)))
+        gid = _grade_id(cell)
+        answer = answers.get((name, gid)) if gid is not None else None
         if answer is not None:
             cell.source = answer
 

@@ -20,10 +20,14 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, Iterable, List, Mapping, Optional, Tuple, Union
+from typing import TYPE_CHECKING, Dict, Iterable, List, Mapping, Optional, Tuple, Union
 
 from duckielib.config import PROJECT_ROOT
 from duckielib.errors import DuckielibError
+
+if TYPE_CHECKING:  # both are imported where used: they are slow to import
+    from nbgrader.apps import NbGraderAPI
+    from traitlets.config import Config
 
 __all__ = [
     "ROOT",
@@ -75,7 +79,7 @@ def nbgrader_config(
     release: PathLike = "course",
     db: Optional[PathLike] = None,
     source: PathLike = "solutions",
-) -> Config:  # noqa: F821 - traitlets is imported lazily
+) -> Config:
     """The nbgrader configuration of the course.
 
     Args:
@@ -97,7 +101,7 @@ def nbgrader_config(
     return config
 
 
-def nbgrader_api(config: Config) -> NbGraderAPI:  # noqa: F821
+def nbgrader_api(config: Config) -> NbGraderAPI:
     """Nbgrader's API on ``config``, with the environment's programs first on PATH.
 
     nbgrader runs alembic by name: the environment's bin must come first on PATH.

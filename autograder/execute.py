@@ -35,7 +35,7 @@ import signal
 import sys
 import time
 from pathlib import Path
-from typing import Any, Dict, List, NoReturn, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Mapping, NoReturn, Optional, Sequence, Tuple
 
 NOT_RUN = "NotRun"
 #: Where the grader's findings travel back, in the notebook's metadata.
@@ -615,16 +615,16 @@ class _Forks:
             data = data[os.write(self.replies, data) :]
 
 
-def _kernel_env(env: Dict[str, str]) -> Dict[str, str]:
+def _kernel_env(env: Mapping[str, str]) -> Dict[str, str]:
     """The environment variables that matter to the zygote's imports, from a kernel's.
 
     ``JPY_PARENT_PID`` names the kernel's parent, set for each kernel; an unset
     ``MPLBACKEND`` is the inline backend ipykernel sets.
     """
-    env = {key: value for key, value in env.items() if key != "JPY_PARENT_PID"}
-    if not env.get("MPLBACKEND"):
-        env["MPLBACKEND"] = _INLINE_BACKEND
-    return env
+    kept = {key: value for key, value in env.items() if key != "JPY_PARENT_PID"}
+    if not kept.get("MPLBACKEND"):
+        kept["MPLBACKEND"] = _INLINE_BACKEND
+    return kept
 
 
 def _threads() -> int:

@@ -99,7 +99,9 @@ class _Repair:
     def __init__(self, name: str, release: NotebookNode) -> None:
         self.name = name
         self.release = release
-        self.owned = {_grade_id(cell): cell for cell in release.cells if _grade_id(cell)}
+        self.owned: Dict[str, NotebookNode] = {
+            gid: cell for cell in release.cells if (gid := _grade_id(cell))
+        }
         self.by_cell_id = {cell.get("id"): gid for gid, cell in self.owned.items()}
         self.problems: List[str] = []
 

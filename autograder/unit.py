@@ -294,12 +294,15 @@ class _Server:
         """End the sandbox and everything in it."""
         if self.process is None:
             return
-        with contextlib.suppress(OSError):
-            self.process.stdin.close()
+        # _start always opens both pipes; Popen only types them as optional.
+        if self.process.stdin is not None:
+            with contextlib.suppress(OSError):
+                self.process.stdin.close()
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.process.pid, signal.SIGKILL)
         self.process.wait()
-        self.process.stdout.close()
+        if self.process.stdout is not None:
+            self.process.stdout.close()
         self.errors.close()
         self.process = self.errors = None
 

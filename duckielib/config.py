@@ -14,7 +14,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict
+from typing import Any, Dict
 
 from duckielib.errors import ConfigError
 
@@ -97,7 +97,7 @@ class RobotConfig:
         if not 0 <= self.pwm_min < self.pwm_max <= 255:
             raise ConfigError("RobotConfig needs 0 <= pwm_min < pwm_max <= 255.")
 
-    def replace(self, **changes: float) -> RobotConfig:
+    def replace(self, **changes: Any) -> RobotConfig:
         """A copy with some values changed (the original stays as it is).
 
         Raises:

@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 from duckielib.errors import ConfigError
 
@@ -168,7 +168,7 @@ def pattern_named(name: str) -> Pattern:
     return pattern
 
 
-def _check_color(color: object, index: int) -> Color:
+def _check_color(color: Any, index: int) -> Color:
     if isinstance(color, str):
         if color not in COLORS:
             raise ConfigError(

@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import math
 from numbers import Integral, Real
+from typing import Any, Dict, Tuple, Type, TypeVar
 
 __all__ = ["NS_PER_S", "Time", "Duration"]
 
 #: Nanoseconds in a second: ROS times are whole seconds and nanoseconds.
 NS_PER_S = 1_000_000_000
+
+_Value = TypeVar("_Value", bound="_TimeValue")
 
 
 class _TimeValue:
@@ -47,17 +50,17 @@ class _TimeValue:
         self.secs, self.nsecs = divmod(total, NS_PER_S)
 
     @classmethod
-    def from_sec(cls, seconds: float):
+    def from_sec(cls: Type[_Value], seconds: float) -> _Value:
         """Build from a number of seconds (float)."""
         return cls(seconds)
 
     @classmethod
-    def from_nsec(cls, nanoseconds: int):
+    def from_nsec(cls: Type[_Value], nanoseconds: int) -> _Value:
         """Build from an integer number of nanoseconds."""
         return cls(0, int(nanoseconds))
 
     @classmethod
-    def from_seconds(cls, seconds: float):
+    def from_seconds(cls: Type[_Value], seconds: float) -> _Value:
         """Same as :meth:`from_sec` (rospy offers both names)."""
         return cls(seconds)
 
@@ -110,13 +113,13 @@ class _TimeValue:
     def __str__(self) -> str:
         return str(self.to_nsec())
 
-    def __copy__(self):
+    def __copy__(self: _Value) -> _Value:
         return type(self)(self.secs, self.nsecs)
 
-    def __deepcopy__(self, memo: dict):
+    def __deepcopy__(self: _Value, memo: Dict[int, Any]) -> _Value:
         return type(self)(self.secs, self.nsecs)
 
-    def __reduce__(self):
+    def __reduce__(self) -> Tuple[type, Tuple[int, int]]:
         return (type(self), (self.secs, self.nsecs))
 
 
@@ -136,7 +139,7 @@ class Time(_TimeValue):
         if self.secs < 0:
             raise ValueError(f"Time cannot be negative (got {self.to_sec()} s).")
 
-    def __add__(self, other: object) -> Time:
+    def __add__(self: _Value, other: object) -> _Value:
         if not isinstance(other, Duration):
             return NotImplemented
         return type(self)(0, self.to_nsec() + other.to_nsec())
@@ -160,10 +163,10 @@ class Duration(_TimeValue):
 
     __slots__ = ()
 
-    def __neg__(self) -> Duration:
+    def __neg__(self: _Value) -> _Value:
         return type(self)(0, -self.to_nsec())
 
-    def __abs__(self) -> Duration:
+    def __abs__(self: _Value) -> _Value:
         return type(self)(0, abs(self.to_nsec()))
 
     def __add__(self, other: object):
@@ -175,15 +178,16 @@ class Duration(_TimeValue):
 
     __radd__ = __add__
 
-    def __sub__(self, other: object) -> Duration:
+    def __sub__(self: _Value, other: object) -> _Value:
         if not isinstance(other, Duration):
             return NotImplemented
         return type(self)(0, self.to_nsec() - other.to_nsec())
 
-    def __mul__(self, factor: object) -> Duration:
+    def __mul__(self: _Value, factor: object) -> _Value:
         if not isinstance(factor, Real):
             return NotImplemented
-        return type(self)(0, round(self.to_nsec() * factor))
+        # int * Real is a Real, but typeshed's numbers module types the product as complex.
+        return type(self)(0, round(self.to_nsec() * factor))  # type: ignore[call-overload]
 
     __rmul__ = __mul__
 
@@ -191,17 +195,19 @@ class Duration(_TimeValue):
         if isinstance(other, Duration):
             return self.to_nsec() / other.to_nsec()
         if isinstance(other, Real):
-            return type(self)(0, round(self.to_nsec() / other))
+            # As in __mul__: int / Real is a Real, which typeshed cannot say.
+            return type(self)(0, round(self.to_nsec() / other))  # type: ignore[call-overload]
         return NotImplemented
 
     def __floordiv__(self, other: object):
         if isinstance(other, Duration):
             return self.to_nsec() // other.to_nsec()
         if isinstance(other, Integral):
-            return type(self)(0, self.to_nsec() // other)
+            # int // Integral is an Integral; typeshed's numbers module only says it is real.
+            return type(self)(0, self.to_nsec() // other)  # type: ignore[arg-type]
         return NotImplemented
 
 
-def _duration_type(time: Time) -> type:
+def _duration_type(time: Time) -> Type[Duration]:
     """The Duration class that goes with a Time class (rospy's goes with rospy's)."""
     return getattr(time, "duration_class", Duration)

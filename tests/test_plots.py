@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import math
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -318,10 +319,26 @@ def imported_modules(nodes):
     return names
 
 
-def test_plots_imports_only_numpy_matplotlib_and_the_pure_modules():
-    tree = ast.parse(Path(plots.paths.__file__).read_text())
+#: The modules of the package that draw recorded runs: they need neither the simulator nor
+#: rosbags (only world.py reads the simulator).
+PURE_PLOTS = ("canvas", "diagrams", "files", "paths")
+
+
+@pytest.mark.parametrize("name", PURE_PLOTS)
+def test_plots_imports_only_numpy_matplotlib_and_the_pure_modules(name):
+    tree = ast.parse(Path(plots.__file__).with_name(f"{name}.py").read_text())
     everywhere = imported_modules(ast.walk(tree))
-    allowed_roots = {"__future__", "io", "math", "pathlib", "typing", "numpy", "matplotlib"}
+    allowed_roots = {
+        "__future__",
+        "contextlib",
+        "io",
+        "math",
+        "pathlib",
+        "secrets",
+        "typing",
+        "numpy",
+        "matplotlib",
+    }
     outside = {
         name
         for name in everywhere
@@ -329,23 +346,141 @@ def test_plots_imports_only_numpy_matplotlib_and_the_pure_modules():
         and not name.startswith(
             ("duckielib.config.", "duckielib.errors.", "duckielib.leds.", "duckielib.missions.")
         )
+        and not name.startswith(tuple(f"duckielib.plots.{pure}." for pure in PURE_PLOTS))
     }
     assert outside == set()
     # pyplot (which picks a GUI backend) is imported only inside animate_path.
     at_import = imported_modules(node for node in tree.body)
-    assert "matplotlib.pyplot" in everywhere
+    assert ("matplotlib.pyplot" in everywhere) == (name == "paths")
     assert "matplotlib.pyplot" not in at_import
+
+
+def test_the_package_exports_every_public_name_of_its_modules():
+    import importlib
+
+    for name in (*PURE_PLOTS, "world"):
+        module = importlib.import_module(f"duckielib.plots.{name}")
+        for public in module.__all__:
+            assert getattr(plots, public) is getattr(module, public), f"{name}.{public}"
+            assert public in plots.__all__
+    # One function saves animations, one draws the tiles: no module keeps its own.
+    assert not hasattr(plots.world, "save_animation")
+    assert not hasattr(plots.paths, "save_animation")
 
 
 def test_save_animation_writes_a_whole_gif_or_refuses(tmp_path):
     anim = plots.animate_path(line(), fps=2.0)
     path = plots.save_animation(anim, tmp_path / "run.gif", fps=2.0, dpi=20)
+    assert path == tmp_path / "run.gif"
     assert path.read_bytes()[:6] == b"GIF89a"
     assert [item.name for item in tmp_path.iterdir()] == ["run.gif"]
-    with pytest.raises(DuckielibError, match=r"must end in \.gif"):
+    with pytest.raises(DuckielibError) as caught:
+        plots.save_animation(anim, tmp_path / "run.avi")
+    assert str(caught.value) == (
+        f"Cannot save the animation as {str(tmp_path / 'run.avi')!r}: use a name ending in "
+        f".gif or .mp4."
+    )
+    missing = tmp_path / "missing" / "run.gif"
+    with pytest.raises(DuckielibError, match="does not exist; create it first"):
+        plots.save_animation(anim, missing)
+    assert not missing.parent.exists()
+    assert [item.name for item in tmp_path.iterdir()] == ["run.gif"]
+
+
+@pytest.mark.skipif(
+    shutil.which("ffmpeg") is None, reason="ffmpeg is not installed; run `make ros` to install it"
+)
+def test_save_animation_writes_a_whole_mp4(tmp_path):
+    anim = plots.animate_path(line(), fps=2.0)
+    path = plots.save_animation(anim, tmp_path / "run.mp4", fps=2.0, dpi=20)
+    assert path == tmp_path / "run.mp4"
+    assert path.read_bytes()[4:8] == b"ftyp"  # an MP4 (ISO media) file
+    assert [item.name for item in tmp_path.iterdir()] == ["run.mp4"]
+
+
+def test_save_animation_without_ffmpeg_asks_for_it_or_a_gif(tmp_path, monkeypatch):
+    from matplotlib import animation
+
+    monkeypatch.setattr(animation.writers, "is_available", lambda name: False)
+    anim = plots.animate_path(line(), fps=2.0)
+    with pytest.raises(DuckielibError, match=r"needs ffmpeg.*or save a \.gif instead\.$"):
         plots.save_animation(anim, tmp_path / "run.mp4")
-    with pytest.raises(DuckielibError, match="no folder"):
-        plots.save_animation(anim, tmp_path / "missing" / "run.gif")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_failed_save_leaves_no_file_behind(tmp_path):
+    from matplotlib import pyplot as plt
+    from matplotlib.animation import FuncAnimation
+
+    def draw(frame):
+        if frame == 2:
+            raise RuntimeError("frame 2 cannot be drawn")
+        return []
+
+    fig = plt.figure(figsize=(1, 1))
+    anim = FuncAnimation(fig, draw, frames=4)
+    with pytest.raises(RuntimeError, match="frame 2"):
+        plots.save_animation(anim, tmp_path / "run.gif", fps=2.0, dpi=20)
+    assert list(tmp_path.iterdir()) == []
+    plt.close(fig)
+    # A figure that cannot be drawn leaves nothing either, and an old file stays as it was.
+    (tmp_path / "poses.png").write_bytes(b"old")
+    broken = plots.plot_path(circle()).figure
+    broken.axes[0].text(0, 0, "$\\undefined$")
+    with pytest.raises(ValueError, match="undefined"):
+        plots.save_figure(broken, tmp_path / "poses.png")
+    assert [item.name for item in tmp_path.iterdir()] == ["poses.png"]
+    assert (tmp_path / "poses.png").read_bytes() == b"old"
+
+
+def test_a_write_that_fails_is_one_sentence_and_leaves_nothing(tmp_path, monkeypatch):
+    anim = plots.animate_path(line(), fps=2.0)
+
+    def full_disk(self, *args, **kwargs):
+        Path(args[0]).write_bytes(b"GIF89a")  # half a file, then the disk is full
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(type(anim), "save", full_disk)
+    with pytest.raises(DuckielibError) as caught:
+        plots.save_animation(anim, tmp_path / "run.gif")
+    assert str(caught.value) == (
+        f"Cannot save the animation as {str(tmp_path / 'run.gif')!r}: No space left on "
+        f"device; check that you may write there."
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_tracks_and_the_world_draw_the_same_tile_grid():
+    from matplotlib.colors import to_hex
+
+    from duckielib.sim import World
+
+    world = World()
+    # A track across the whole mat, inside its border: its grid is the mat's.
+    inside = Track(
+        np.array([0.0, 1.0]),
+        np.array([0.05, world.width - 0.2]),
+        np.array([0.05, world.height - 0.2]),
+        np.zeros(2),
+        "across",
+    )
+    ax_path = plots.plot_path(inside)
+    ax_world = Figure().add_subplot()
+    plots.draw_mat(ax_world, world)
+    np.testing.assert_allclose(tile_grid(ax_world), tile_grid(ax_path), atol=1e-12)
+    np.testing.assert_allclose(tile_grid(ax_world), np.concatenate(world.grid_lines()))
+    # Under the paths; on the mat, in its own colour over its dark tiles, under the walls.
+    (path_grid,) = [item for item in ax_path.collections if item.get_gid() == "tile-grid"]
+    (mat_grid,) = [item for item in ax_world.collections if item.get_gid() == "tile-grid"]
+    assert to_hex(path_grid.get_edgecolor()[0]) == "#d0d0d0"
+    assert to_hex(mat_grid.get_edgecolor()[0]) == "#e8e8dc"
+    assert path_grid.get_zorder() < min(line.get_zorder() for line in ax_path.get_lines())
+    assert not ax_path.patches
+    tiles = [patch for patch in ax_world.patches if patch.get_zorder() < mat_grid.get_zorder()]
+    assert len(tiles) == world.tiles_x * world.tiles_y
+    assert {to_hex(tile.get_facecolor()) for tile in tiles} == {"#3a3a3e", "#48484d"}
+    (walls,) = [patch for patch in ax_world.patches if patch.get_zorder() > mat_grid.get_zorder()]
+    assert walls.get_width() > world.width
 
 
 def labels(ax):

@@ -27,7 +27,7 @@ import mmap
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Dict, List, Optional, Tuple
+from typing import Callable, Dict, List, Optional, Tuple, Union
 
 from duckielib.errors import BagError
 
@@ -51,6 +51,8 @@ OP_CONNECTION = 0x07
 _U32 = struct.Struct("<I")
 _U64 = struct.Struct("<Q")
 _TIME = struct.Struct("<II")
+#: What records are read from: a chunk's bytes, or the whole bag mapped into memory.
+_Buffer = Union[bytes, mmap.mmap]
 
 
 @dataclass
@@ -101,7 +103,7 @@ class ScanResult:
     size: int = 0
 
 
-def parse_fields(buffer: bytes, start: int, end: int) -> Dict[bytes, bytes]:
+def parse_fields(buffer: _Buffer, start: int, end: int) -> Dict[bytes, bytes]:
     """The ``name=value`` fields of a record header in ``buffer[start:end]``.
 
     Raises:
@@ -153,7 +155,7 @@ class _Scanner:
             self.keep[connection.id] = self.wanted(connection)
 
     def records(  # noqa: PLR0911, PLR0912 - one branch per record kind and per damage
-        self, buffer: bytes, pos: int, end: int
+        self, buffer: _Buffer, pos: int, end: int
     ) -> Tuple[int, Optional[str]]:
         """Read the records of ``buffer[pos:end]``; return where reading stopped, and why."""
         unpack_u32 = _U32.unpack_from
@@ -211,7 +213,7 @@ class _Scanner:
         return pos, None
 
     def chunk(  # noqa: PLR0911 - one sentence per kind of damage
-        self, fields: Dict[bytes, bytes], buffer: bytes, start: int, end: int
+        self, fields: Dict[bytes, bytes], buffer: _Buffer, start: int, end: int
     ) -> Optional[str]:
         """Read a chunk's records (a cut one gives its complete messages); return any problem."""
         compression = fields.get(b"compression", b"none").decode("ascii", "replace")
@@ -229,9 +231,10 @@ class _Scanner:
             except (OSError, ValueError):
                 return "a bz2 chunk is damaged"
         elif compression == "lz4":
-            data = _lz4(raw)
-            if data is None:
+            decompressed = _lz4(raw)
+            if decompressed is None:
                 return "an lz4 chunk is damaged or cut short"
+            data = decompressed
         else:
             return f"a chunk uses the unknown compression {compression!r}"
         truncated = len(data) < size

@@ -17,7 +17,7 @@ from __future__ import annotations
 import sys
 import types
 from pathlib import Path
-from typing import Dict, List
+from typing import TYPE_CHECKING, Dict, List, Type
 
 from duckielib.errors import UnknownTypeError
 
@@ -62,8 +62,8 @@ _DEFINITIONS = Path(__file__).resolve().parent / "definitions"
 
 #: Every parsed definition, with md5 sums and full texts.
 REGISTRY = SpecRegistry()
-_MESSAGE_CLASSES: Dict[str, type] = {}
-_SERVICE_CLASSES: Dict[str, type] = {}
+_MESSAGE_CLASSES: Dict[str, Type[Message]] = {}
+_SERVICE_CLASSES: Dict[str, Type[Service]] = {}
 
 
 def _read_definitions() -> None:
@@ -78,7 +78,7 @@ def _read_definitions() -> None:
                     REGISTRY.add_service(parse_service(text, full_name))
 
 
-def get_message_class(full_name: str) -> type:
+def get_message_class(full_name: str) -> Type[Message]:
     """The class of a message type, such as ``"duckietown_msgs/WheelEncoderStamped"``.
 
     Raises:
@@ -96,7 +96,7 @@ def get_message_class(full_name: str) -> type:
     return _MESSAGE_CLASSES[full_name]
 
 
-def get_service_class(full_name: str) -> type:
+def get_service_class(full_name: str) -> Type[Service]:
     """The class of a service type, such as ``"duckietown_msgs/ChangePattern"``.
 
     Raises:
@@ -174,3 +174,8 @@ def _new_module(name: str, doc: str) -> types.ModuleType:
 
 _read_definitions()
 _install_modules()
+
+if TYPE_CHECKING:
+    # The classes are made at import time from the definitions (the single source of their
+    # fields), so a type checker sees each one as a message class.
+    def __getattr__(name: str) -> Type[Message]: ...

@@ -16,10 +16,16 @@ Scalar fields need no check here: every assignment was checked when it was made.
 from __future__ import annotations
 
 import struct
-from typing import Any, Callable, Dict, List, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Tuple, Type, Union
 
 from duckielib.errors import MessageError
 from duckielib.rostime import NS_PER_S, Duration, Time
+
+if TYPE_CHECKING:
+    from .message import _FieldCodec
+
+    #: The field codecs of a message type, by field name in definition order.
+    Codecs = Dict[str, _FieldCodec]
 
 __all__ = [
     "FLOAT32_MAX",
@@ -62,7 +68,7 @@ def integer_range(type_name: str) -> Tuple[int, int]:
 _UINT32 = struct.Struct("<I")
 
 
-def _time(kind: type, secs: int, nsecs: int) -> Any:
+def _time(kind: Union[Type[Time], Type[Duration]], secs: int, nsecs: int) -> Union[Time, Duration]:
     """A Time or Duration from unpacked fields, normalised only when it needs to be."""
     if 0 <= nsecs < NS_PER_S:
         value = object.__new__(kind)
@@ -72,7 +78,7 @@ def _time(kind: type, secs: int, nsecs: int) -> Any:
     return kind(secs, nsecs)
 
 
-def _leaves(message_class: type, path: Tuple[str, ...]) -> List[Tuple[str, Tuple[str, ...], Any]]:
+def _leaves(codecs: Codecs, path: Tuple[str, ...]) -> List[Tuple[str, Tuple[str, ...], Any]]:
     """The fields of a message in wire order, nested messages opened up.
 
     Each item is ``(kind, path, detail)``: ``fixed`` (detail: struct letter), ``time``
@@ -80,7 +86,7 @@ def _leaves(message_class: type, path: Tuple[str, ...]) -> List[Tuple[str, Tuple
     and ``end`` around a nested message's own fields (detail: its class).
     """
     found: List[Tuple[str, Tuple[str, ...], Any]] = []
-    for key, codec in message_class._codecs.items():
+    for key, codec in codecs.items():
         field = codec.field
         where = (*path, key)
         if field.is_array:
@@ -88,7 +94,7 @@ def _leaves(message_class: type, path: Tuple[str, ...]) -> List[Tuple[str, Tuple
         elif not field.is_primitive:
             nested = codec.element.message_class
             found.append(("begin", where, nested))
-            found += _leaves(nested, where)
+            found += _leaves(nested._codecs, where)
             found.append(("end", where, nested))
         elif field.base_type == "string":
             found.append(("string", where, None))
@@ -99,11 +105,18 @@ def _leaves(message_class: type, path: Tuple[str, ...]) -> List[Tuple[str, Tuple
     return found
 
 
-def _owner(message_class: type, path: Tuple[str, ...]) -> str:
-    """The name of the message type that holds the field at ``path``."""
+def _owner(name: str, codecs: Codecs, path: Tuple[str, ...]) -> str:
+    """The name of the message type that holds the field at ``path``.
+
+    Args:
+        name: the name of the outermost message type.
+        codecs: its field codecs.
+        path: the field names from the outermost message down to the field.
+    """
     for key in path[:-1]:
-        message_class = message_class._codecs[key].element.message_class
-    return message_class.__name__
+        nested = codecs[key].element.message_class
+        name, codecs = nested.__name__, nested._codecs
+    return name
 
 
 def _compile(source: str, name: str, namespace: Dict[str, Any]) -> Callable[..., Any]:
@@ -111,8 +124,13 @@ def _compile(source: str, name: str, namespace: Dict[str, Any]) -> Callable[...,
     return namespace[name]
 
 
-def make_writer(message_class: type) -> Callable[[Any, bytearray], None]:
-    """``_write(self, out)``: append the message's wire format to ``out``."""
+def make_writer(name: str, codecs: Codecs) -> Callable[[Any, bytearray], None]:
+    """``_write(self, out)``: append the message's wire format to ``out``.
+
+    Args:
+        name: the message type's class name, for error messages.
+        codecs: its field codecs.
+    """
     namespace: Dict[str, Any] = {"_U32": _UINT32}
     lines: List[str] = []
     run: Tuple[List[str], List[str]] = ([], [])
@@ -120,13 +138,13 @@ def make_writer(message_class: type) -> Callable[[Any, bytearray], None]:
     def flush() -> None:
         letters, values = run
         if letters:
-            name = f"_s{len(namespace)}"
-            namespace[name] = struct.Struct("<" + "".join(letters))
-            lines.append(f"    out += {name}.pack({', '.join(values)})")
+            packer_name = f"_s{len(namespace)}"
+            namespace[packer_name] = struct.Struct("<" + "".join(letters))
+            lines.append(f"    out += {packer_name}.pack({', '.join(values)})")
             letters.clear()
             values.clear()
 
-    for kind, path, detail in _leaves(message_class, ()):
+    for kind, path, detail in _leaves(codecs, ()):
         value = "self." + ".".join(path)
         if kind == "fixed":
             run[0].append(detail)
@@ -141,19 +159,23 @@ def make_writer(message_class: type) -> Callable[[Any, bytearray], None]:
             lines.append("    out += _text")
         elif kind == "array":
             flush()
-            name = f"_c{len(namespace)}"
-            namespace[name] = detail
-            owner = _owner(message_class, path)
-            lines.append(f"    {name}.write(out, {name}.accept({owner!r}, {value}))")
+            codec_name = f"_c{len(namespace)}"
+            namespace[codec_name] = detail
+            owner = _owner(name, codecs, path)
+            lines.append(f"    {codec_name}.write(out, {codec_name}.accept({owner!r}, {value}))")
     flush()
     source = "def _write(self, out):\n" + ("\n".join(lines) or "    pass") + "\n"
     return _compile(source, "_write", namespace)
 
 
-def make_reader(message_class: type) -> Callable[[Any, memoryview, int], int]:
-    """``_read(self, data, offset)``: fill the message from ``data``; return the end offset."""
+def make_reader(codecs: Codecs) -> Callable[[Any, Union[bytes, memoryview], int], int]:
+    """``_read(self, data, offset)``: fill the message from ``data``; return the end offset.
+
+    Args:
+        codecs: the message type's field codecs.
+    """
     source = _ReaderSource()
-    for kind, path, detail in _leaves(message_class, ()):
+    for kind, path, detail in _leaves(codecs, ()):
         source.add(kind, path[-1], detail)
     return _compile(source.text(), "_read", source.namespace)
 
@@ -263,17 +285,22 @@ def _fast_test(base_type: str, value: str) -> str:
     return f"type({value}) is int and {low} <= {value} <= {high}"
 
 
-def make_init(message_class: type, generic: Callable[..., None]) -> Callable[..., None]:
+def make_init(name: str, codecs: Codecs, generic: Callable[..., None]) -> Callable[..., None]:
     """``__init__(self, **fields)``, checking each given field and defaulting the others.
 
     Calls with positional values or unknown keywords go to ``generic``, which explains them.
+
+    Args:
+        name: the message type's class name, for error messages.
+        codecs: its field codecs.
+        generic: the checking ``__init__`` of the base class.
     """
     namespace: Dict[str, Any] = {
         "_set": object.__setattr__,
         "_generic": generic,
-        "_fields": frozenset(message_class._codecs),
+        "_fields": frozenset(codecs),
         "_F32": FLOAT32_MAX,
-        "_name": message_class.__name__,
+        "_name": name,
         "_Time": Time,
         "_Duration": Duration,
     }
@@ -283,7 +310,7 @@ def make_init(message_class: type, generic: Callable[..., None]) -> Callable[...
         "        return _generic(self, *args, **kwds)",
         "    get = kwds.get",
     ]
-    for number, (key, codec) in enumerate(message_class._codecs.items()):
+    for number, (key, codec) in enumerate(codecs.items()):
         field = codec.field
         namespace[f"_accept{number}"] = codec.accept
         test = ""
@@ -306,10 +333,14 @@ def make_init(message_class: type, generic: Callable[..., None]) -> Callable[...
     return _compile("\n".join(lines) + "\n", "__init__", namespace)
 
 
-def make_setattr(message_class: type, generic: Callable[..., None]) -> Callable[..., None]:
+def make_setattr(codecs: Codecs, generic: Callable[..., None]) -> Callable[..., None]:
     """``__setattr__(self, key, value)``: store plainly fine values at once, as ``__init__``.
 
     Other values and unknown names go to ``generic``, which checks them or explains.
+
+    Args:
+        codecs: the message type's field codecs.
+        generic: the checking ``__setattr__`` of the base class.
     """
     namespace: Dict[str, Any] = {
         "_set": object.__setattr__,
@@ -319,7 +350,7 @@ def make_setattr(message_class: type, generic: Callable[..., None]) -> Callable[
         "_Duration": Duration,
     }
     lines = ["def __setattr__(self, key, value):"]
-    for number, (key, codec) in enumerate(message_class._codecs.items()):
+    for number, (key, codec) in enumerate(codecs.items()):
         field = codec.field
         if field.is_array:
             test = ""
@@ -353,7 +384,7 @@ def _read_string(name: str) -> List[str]:
     ]
 
 
-def _cut_short(data: memoryview, end: Any, message: Any = None) -> None:
+def _cut_short(data: Union[bytes, memoryview], end: Any, message: Any = None) -> None:
     """Raise the error for bytes that end before the message does."""
     what = f"serialized {message._type}" if message is not None else "serialized message"
     needs = f": it needs {end} bytes but has {len(data)}" if end is not None else ""

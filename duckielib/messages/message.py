@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 import struct
 from numbers import Integral, Real
-from typing import Any, Callable, ClassVar, Dict, List, Tuple
+from typing import Any, Callable, ClassVar, Dict, List, Tuple, Type, TypeVar, Union, cast
 
 from duckielib.errors import MessageError
 from duckielib.rostime import Duration, Time
@@ -46,6 +46,9 @@ _SHORT_ARRAY = 16
 #: What packing a field with a value of the wrong type or size raises.
 _WRITE_ERRORS = (struct.error, TypeError, ValueError, OverflowError, AttributeError)
 _set = object.__setattr__
+#: What messages are read from: bytes, or a view of a larger buffer.
+_Data = Union[bytes, memoryview]
+_M = TypeVar("_M", bound="Message")
 
 
 class _Codec:
@@ -57,7 +60,7 @@ class _Codec:
         check: Callable[[Any], bool],
         default: Callable[[], Any],
         write: Callable[[bytearray, Any], None],
-        read: Callable[[memoryview, int], Tuple[Any, int]],
+        read: Callable[[_Data, int], Tuple[Any, int]],
         message_class: Any = None,
     ) -> None:
         self.describe = describe
@@ -90,12 +93,16 @@ def _integer_codec(type_name: str) -> _Codec:
     def check(value: Any) -> bool:
         if type(value) is int:  # the common case, without the slower ABC check
             return low <= value <= high
-        return isinstance(value, Integral) and not isinstance(value, bool) and low <= value <= high
+        return (
+            isinstance(value, Integral)
+            and not isinstance(value, bool)
+            and low <= int(value) <= high
+        )
 
     def write(out: bytearray, value: Any) -> None:
         out += packer.pack(value)
 
-    def read(data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(data: _Data, offset: int) -> Tuple[Any, int]:
         return packer.unpack_from(data, offset)[0], offset + packer.size
 
     return _Codec(f"an integer from {low} to {high} ({type_name})", check, int, write, read)
@@ -111,7 +118,7 @@ def _float_codec(type_name: str) -> _Codec:
     def write(out: bytearray, value: Any) -> None:
         out += packer.pack(value)
 
-    def read(data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(data: _Data, offset: int) -> Tuple[Any, int]:
         return packer.unpack_from(data, offset)[0], offset + packer.size
 
     return _Codec(f"a number ({type_name})", check, float, write, read)
@@ -121,7 +128,7 @@ def _bool_codec() -> _Codec:
     def write(out: bytearray, value: Any) -> None:
         out.append(1 if value else 0)
 
-    def read(data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(data: _Data, offset: int) -> Tuple[Any, int]:
         return bool(data[offset]), offset + 1
 
     return _Codec("True or False (bool)", _is_bool, bool, write, read)
@@ -133,7 +140,7 @@ def _string_codec() -> _Codec:
         out += _UINT32.pack(len(encoded))
         out += encoded
 
-    def read(data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(data: _Data, offset: int) -> Tuple[Any, int]:
         (length,) = _UINT32.unpack_from(data, offset)
         start = offset + 4
         _require(data, start + length)
@@ -142,13 +149,13 @@ def _string_codec() -> _Codec:
     return _Codec("a str (string)", lambda value: isinstance(value, str), str, write, read)
 
 
-def _time_codec(kind: type) -> _Codec:
+def _time_codec(kind: Union[Type[Time], Type[Duration]]) -> _Codec:
     packer = _TIME if kind is Time else _DURATION
 
     def write(out: bytearray, value: Any) -> None:
         out += packer.pack(value.secs, value.nsecs)
 
-    def read(data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(data: _Data, offset: int) -> Tuple[Any, int]:
         secs, nsecs = packer.unpack_from(data, offset)
         return kind(secs, nsecs), offset + packer.size
 
@@ -162,11 +169,11 @@ def _time_codec(kind: type) -> _Codec:
     )
 
 
-def _message_codec(message_class: type) -> _Codec:
+def _message_codec(message_class: Type[Message]) -> _Codec:
     def write(out: bytearray, value: Any) -> None:
         value._write(out)
 
-    def read(data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(data: _Data, offset: int) -> Tuple[Any, int]:
         message = message_class.__new__(message_class)
         return message, message._read(data, offset)
 
@@ -192,7 +199,7 @@ def _primitive_codec(type_name: str) -> _Codec:
     return _time_codec(Time if type_name == "time" else Duration)
 
 
-def _require(data: memoryview, end: int) -> None:
+def _require(data: _Data, end: int) -> None:
     if end > len(data):
         raise MessageError(
             f"The serialized message is cut short: it needs {end} bytes but has {len(data)}."
@@ -262,7 +269,7 @@ class _FieldCodec:
             for item in value:
                 self.element.write(out, item)
 
-    def read(self, data: memoryview, offset: int) -> Tuple[Any, int]:
+    def read(self, data: _Data, offset: int) -> Tuple[Any, int]:
         if not self.field.is_array:
             return self.element.read(data, offset)
         length = self.field.array_length
@@ -349,7 +356,7 @@ class Message:
     def _write(self, out: bytearray) -> None:
         pass
 
-    def _read(self, data: memoryview, offset: int) -> int:
+    def _read(self, data: _Data, offset: int) -> int:
         return offset
 
     def serialize(self, buff: Any) -> None:
@@ -374,7 +381,7 @@ class Message:
             raise MessageError(f"This {self._type} cannot be serialized: {error}.") from None
         return bytes(out)
 
-    def deserialize(self, data: bytes) -> Message:
+    def deserialize(self: _M, data: bytes) -> _M:
         """Fill this message from ROS 1 wire-format bytes and return it (as genpy does).
 
         Raises:
@@ -390,7 +397,7 @@ class Message:
         return self
 
     @classmethod
-    def from_bytes(cls, data: bytes) -> Message:
+    def from_bytes(cls: Type[_M], data: bytes) -> _M:
         """A new message read from ROS 1 wire-format bytes."""
         message = cls.__new__(cls)
         if type(data) is bytes and message._read(data, 0) == len(data):
@@ -469,17 +476,17 @@ class Service:
 
     _type: ClassVar[str] = ""
     _md5sum: ClassVar[str] = ""
-    _request_class: ClassVar[type] = Message
-    _response_class: ClassVar[type] = Message
+    _request_class: ClassVar[Type[Message]] = Message
+    _response_class: ClassVar[Type[Message]] = Message
 
 
 def make_message_class(
     spec: MessageSpec,
     md5sum: str,
     full_text: str,
-    resolve: Callable[[str], type],
+    resolve: Callable[[str], Type[Message]],
     kind: str = "msg",
-) -> type:
+) -> Type[Message]:
     """Create the class of a message type.
 
     Args:
@@ -511,17 +518,21 @@ def make_message_class(
     }
     for constant in spec.constants:
         namespace[constant.name] = constant.value
-    message_class = type(spec.short_name, (Message,), namespace)
-    message_class._write = make_writer(message_class)
-    message_class._read = make_reader(message_class)
-    message_class.__init__ = make_init(message_class, Message.__init__)
-    message_class.__setattr__ = make_setattr(message_class, Message.__setattr__)
-    return message_class
+    namespace["_write"] = make_writer(spec.short_name, codecs)
+    namespace["_read"] = make_reader(codecs)
+    namespace["__init__"] = make_init(spec.short_name, codecs, Message.__init__)
+    namespace["__setattr__"] = make_setattr(codecs, Message.__setattr__)
+    # type() is typed as making some class; it makes a subclass of its base, Message.
+    return cast(Type[Message], type(spec.short_name, (Message,), namespace))
 
 
 def make_service_class(
-    full_name: str, md5sum: str, request_class: type, response_class: type, text: str
-) -> type:
+    full_name: str,
+    md5sum: str,
+    request_class: Type[Message],
+    response_class: Type[Message],
+    text: str,
+) -> Type[Service]:
     """Create the class of a service type from its request and response classes."""
     package, short_name = full_name.split("/")
     namespace: Dict[str, Any] = {
@@ -533,4 +544,4 @@ def make_service_class(
         "_request_class": request_class,
         "_response_class": response_class,
     }
-    return type(short_name, (Service,), namespace)
+    return cast(Type[Service], type(short_name, (Service,), namespace))

@@ -1,30 +1,39 @@
-"""Pictures with matplotlib: pose tracks, the mat and the robot, the notebooks' diagrams.
+"""Pictures with matplotlib: pose tracks, the simulator's world, the notebooks' diagrams.
 
-This package is the library's only place that imports matplotlib (laptop only).
+This package is the only place of the library that imports matplotlib (laptop only); nothing
+outside it draws, and the modules it draws (the simulator, the bags) never import it back.
 
-- :mod:`~duckielib.plots.paths`: pose tracks (odometry against the ground truth) as paths
-  on the mat and over time, their animation, and the notebooks' diagrams;
-- :mod:`~duckielib.plots.world`: the simulator's mat, the robot with its LEDs, and its runs.
+- :mod:`~duckielib.plots.paths`: pose tracks (odometry against the ground truth) as paths on
+  the mat and over time, and their animation;
+- :mod:`~duckielib.plots.world`: the simulator's mat, the robot with its LEDs, and its runs;
+- :mod:`~duckielib.plots.diagrams`: the notebooks' diagrams of topics, nodes and missions;
+- :mod:`~duckielib.plots.files`: every figure and animation written to a file, whole or not
+  at all;
+- :mod:`~duckielib.plots.canvas`: what they share: a figure that shows itself in a notebook,
+  and the one drawing of the mat's tiles.
+
+Every name in a module's ``__all__`` is imported here, so ``from duckielib.plots import ...``
+is all a notebook or a command needs; other names are the package's own.
 """
 
-from duckielib.plots.paths import (
-    animate_path,
-    plot_mission_nodes,
-    plot_mission_states,
-    plot_path,
-    plot_pose_over_time,
-    plot_topic_ends,
-    pose_figure,
-    save_animation,
-    save_figure,
-)
+from duckielib.plots.canvas import draw_tile_grid
+from duckielib.plots.diagrams import plot_mission_nodes, plot_mission_states, plot_topic_ends
+from duckielib.plots.files import save_animation, save_figure
+from duckielib.plots.paths import animate_path, plot_path, plot_pose_over_time, pose_figure
+from duckielib.plots.world import animate_run, animation_html, draw_mat, draw_robot, plot_run
 
 __all__ = [
     "animate_path",
+    "animate_run",
+    "animation_html",
+    "draw_mat",
+    "draw_robot",
+    "draw_tile_grid",
     "plot_mission_nodes",
     "plot_mission_states",
     "plot_path",
     "plot_pose_over_time",
+    "plot_run",
     "plot_topic_ends",
     "pose_figure",
     "save_animation",

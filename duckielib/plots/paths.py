@@ -1,8 +1,8 @@
-"""Plots of robot pose tracks with matplotlib: odometry estimates against the ground truth.
+"""Plots of robot pose tracks: odometry estimates against the ground truth.
 
-This is the module where matplotlib is imported to look at recorded runs (ROS bags); it needs
-only numpy and matplotlib, not the simulator nor rosbags. Figures are made with
-:class:`matplotlib.figure.Figure` rather than pyplot, so they work headless and from the
+These plots look at recorded runs (ROS bags, :mod:`duckielib.bags`); they need only numpy and
+matplotlib, not the simulator nor rosbags. Figures are made without pyplot
+(:class:`~duckielib.plots.canvas.NotebookFigure`), so they work headless and from the
 ``duckie`` command; only :func:`animate_path` uses pyplot.
 
 A *track* is any object with these attributes (a dataclass, a named tuple, what the bags module
@@ -15,104 +15,69 @@ reads):
 
 Conventions: SI units, the world frame seen from above with x to the right and y up, equal
 scales on both axes, and theta shown wrapped into [0, 2*pi). The light grid drawn under the
-paths is the mat's tiles, :data:`duckielib.config.TILE_SIZE` metres apart.
+paths is the mat's tiles (:func:`~duckielib.plots.canvas.draw_tile_grid`).
 
 - :func:`plot_path`: the x-y paths on the mat, with where each track started and ended.
 - :func:`plot_pose_over_time`: x(t), y(t) and theta(t), one above the other.
 - :func:`pose_figure`: both in one figure, the usual way to compare two tracks.
-- :func:`animate_path`: the paths growing over time.
-- :func:`save_figure`: write a figure as PNG, SVG or PDF.
+- :func:`animate_path`: the paths growing over time; :func:`~duckielib.plots.save_animation`
+  writes it to a file.
 
-Diagrams of the notebooks live here too, so that a notebook shows each with one call:
-
-- :func:`plot_topic_ends`: each topic between the nodes that publish and subscribe to it.
-
-- :func:`plot_mission_states`: a mission's states as boxes in their LED colours, in order.
-- :func:`plot_mission_nodes`: the nodes of a mission run and the topics and services between
-  them.
+Like every module of :mod:`duckielib.plots`, the library's only package that imports
+matplotlib, it runs on the laptop only.
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
-from typing import (
-    TYPE_CHECKING,
-    List,
-    Mapping,
-    NamedTuple,
-    Optional,
-    Sequence,
-    Tuple,
-    Union,
-)
+from typing import TYPE_CHECKING, List, NamedTuple, Optional, Sequence, Tuple, Union, cast
 
 import numpy as np
-from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import Rectangle
 
 from duckielib.config import TILE_SIZE
 from duckielib.errors import DuckielibError
-from duckielib.leds import pattern_colors, pattern_named
-from duckielib.missions import Mission, describe_move
+from duckielib.plots.canvas import NotebookFigure, draw_tile_grid, tile_span
 
 if TYPE_CHECKING:
     from typing import Protocol
 
     from matplotlib.animation import FuncAnimation
+    from matplotlib.artist import Artist
     from matplotlib.axes import Axes
+    from matplotlib.typing import ColorType
 
     class _Track(Protocol):
         """What a track must provide (see the module docstring)."""
 
-        t: np.ndarray
-        x: np.ndarray
-        y: np.ndarray
-        theta: np.ndarray
-        label: str
+        @property
+        def t(self) -> np.ndarray: ...
+
+        @property
+        def x(self) -> np.ndarray: ...
+
+        @property
+        def y(self) -> np.ndarray: ...
+
+        @property
+        def theta(self) -> np.ndarray: ...
+
+        @property
+        def label(self) -> str: ...
 
     Tracks = Union[_Track, Sequence[_Track]]
 
-__all__ = [
-    "plot_mission_nodes",
-    "plot_mission_states",
-    "plot_path",
-    "plot_pose_over_time",
-    "plot_topic_ends",
-    "pose_figure",
-    "animate_path",
-    "save_animation",
-    "save_figure",
-]
+__all__ = ["animate_path", "plot_path", "plot_pose_over_time", "pose_figure"]
 
 _TWO_PI = 2.0 * math.pi
-
-
-class _Figure(Figure):
-    """A figure that shows itself in a notebook as a picture.
-
-    Jupyter draws pyplot's figures once pyplot's backend has started; a figure made without
-    pyplot, as here (headless, for the ``duckie`` command too), would otherwise be shown as the
-    text ``<Figure size ...>`` until some cell has used pyplot.
-    """
-
-    def _repr_png_(self) -> bytes:
-        from io import BytesIO
-
-        buffer = BytesIO()
-        self.savefig(buffer, format="png", bbox_inches="tight")
-        return buffer.getvalue()
-
-
 #: Length of the arrows that show a heading, in metres (about a Duckiebot's length).
 _HEADING_LENGTH = 0.12
-_GRID_COLOR = "#d0d0d0"
 _REFERENCE_COLOR = "#d62728"
+#: Space left around the tile grid, in metres.
+_GRID_MARGIN = 0.02 * TILE_SIZE
 _THETA_TICKS = (0.0, math.pi / 2, math.pi, 3 * math.pi / 2, _TWO_PI)
 _THETA_TICK_LABELS = ("0", "π/2", "π", "3π/2", "2π")
-_FIGURE_FORMATS = (".png", ".svg", ".pdf")
 
 
 class _Samples(NamedTuple):
@@ -128,8 +93,8 @@ class _Samples(NamedTuple):
 def _as_samples(tracks: Tracks) -> List[_Samples]:
     """The tracks as a checked list; one track on its own counts as a list of one."""
     if hasattr(tracks, "t"):
-        tracks = [tracks]  # type: ignore[list-item]
-    tracks = list(tracks)  # type: ignore[arg-type]
+        tracks = [cast("_Track", tracks)]
+    tracks = list(tracks)
     if not tracks:
         raise DuckielibError(
             "There are no tracks to plot; pass at least one track with t, x, y, theta and label."
@@ -156,7 +121,8 @@ def _as_samples(tracks: Tracks) -> List[_Samples]:
             raise DuckielibError(
                 f"Track {label!r} has no samples; check that its topic was recorded in the bag."
             )
-        checked.append(_Samples(*arrays, label=label))
+        t, x, y, theta = arrays
+        checked.append(_Samples(t, x, y, theta, label))
     return checked
 
 
@@ -200,43 +166,6 @@ def _reference_pose(reference: Optional[Sequence[float]]) -> Optional[Tuple[floa
             f"not {reference!r}."
         )
     return tuple(float(value) for value in values)
-
-
-def _tile_range(values: np.ndarray) -> Tuple[float, float]:
-    """The smallest run of whole tiles, in metres, that covers ``values`` (at least one tile)."""
-    finite = values[np.isfinite(values)]
-    if finite.size == 0:
-        return 0.0, TILE_SIZE
-    low = math.floor(float(finite.min()) / TILE_SIZE)
-    high = math.ceil(float(finite.max()) / TILE_SIZE)
-    if high <= low:
-        high = low + 1
-    return low * TILE_SIZE, high * TILE_SIZE
-
-
-def _draw_tile_grid(ax: Axes, xs: np.ndarray, ys: np.ndarray) -> None:
-    """Draw the mat's tile borders under everything and fit the view to them.
-
-    The grid covers ``xs`` and ``ys`` (positions in metres, any shape) padded to whole tiles.
-    """
-    x_low, x_high = _tile_range(xs)
-    y_low, y_high = _tile_range(ys)
-    columns = round((x_high - x_low) / TILE_SIZE)
-    rows = round((y_high - y_low) / TILE_SIZE)
-    segments = [
-        [(x_low + i * TILE_SIZE, y_low), (x_low + i * TILE_SIZE, y_high)]
-        for i in range(columns + 1)
-    ]
-    segments += [
-        [(x_low, y_low + j * TILE_SIZE), (x_high, y_low + j * TILE_SIZE)] for j in range(rows + 1)
-    ]
-    ax.add_collection(
-        LineCollection(segments, colors=_GRID_COLOR, linewidths=1.0, zorder=0.5, gid="tile-grid"),
-        autolim=False,
-    )
-    margin = 0.02 * TILE_SIZE
-    ax.set_xlim(x_low - margin, x_high + margin)
-    ax.set_ylim(y_low - margin, y_high + margin)
 
 
 def _draw_paths(
@@ -295,7 +224,12 @@ def _draw_paths(
             xs.append(np.array([tip[0]]))
             ys.append(np.array([tip[1]]))
     if grid:
-        _draw_tile_grid(ax, np.concatenate(xs), np.concatenate(ys))
+        # The grid covers everything drawn, padded to whole tiles, and the view fits the grid.
+        x_low, x_high = tile_span(np.concatenate(xs))
+        y_low, y_high = tile_span(np.concatenate(ys))
+        draw_tile_grid(ax, (x_low, x_high), (y_low, y_high))
+        ax.set_xlim(x_low - _GRID_MARGIN, x_high + _GRID_MARGIN)
+        ax.set_ylim(y_low - _GRID_MARGIN, y_high + _GRID_MARGIN)
     ax.set_aspect("equal")
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
@@ -314,7 +248,7 @@ def _draw_paths(
 
 
 def _draw_heading(
-    ax: Axes, pose: Sequence[float], color: str, zorder: float
+    ax: Axes, pose: Sequence[float], color: ColorType, zorder: float
 ) -> Tuple[float, float]:
     """Draw an arrow from (x, y) along theta; return its tip, in metres."""
     tip = _heading_end(*pose)
@@ -357,7 +291,7 @@ def plot_path(
     samples = _as_samples(tracks)
     pose = _reference_pose(reference)
     if ax is None:
-        ax = _Figure(figsize=(6, 6), layout="constrained").add_subplot()
+        ax = NotebookFigure(figsize=(6, 6), layout="constrained").add_subplot()
     _draw_paths(ax, samples, pose, grid=grid, ends=True)
     return ax
 
@@ -406,7 +340,9 @@ def plot_pose_over_time(tracks: Tracks, axes: Optional[Sequence[Axes]] = None) -
     """
     samples = _as_samples(tracks)
     if axes is None:
-        axes = list(_Figure(figsize=(7, 6), layout="constrained").subplots(3, 1, sharex=True))
+        axes = list(
+            NotebookFigure(figsize=(7, 6), layout="constrained").subplots(3, 1, sharex=True)
+        )
     axes = list(axes)
     if len(axes) != 3:
         raise DuckielibError(
@@ -435,7 +371,7 @@ def pose_figure(
             an (x, y) or (x, y, theta).
     """
     samples = _as_samples(tracks)
-    fig = _Figure(figsize=(12, 6), layout="constrained")
+    fig = NotebookFigure(figsize=(12, 6), layout="constrained")
     grid = fig.add_gridspec(3, 2)
     path_ax = fig.add_subplot(grid[:, 0])
     ax_x = fig.add_subplot(grid[0, 1])
@@ -501,8 +437,8 @@ def animate_path(tracks: Tracks, fps: float = 15.0, speed: float = 1.0) -> FuncA
         moving.append((line, marker, heading))
     text = ax.set_title("")
 
-    def draw(time: float) -> List[object]:
-        artists: List[object] = [text]
+    def draw(time: float) -> List[Artist]:
+        artists: List[Artist] = [text]
         for track, (line, marker, heading) in zip(samples, moving):
             shown = int(np.searchsorted(track.t, time, side="right"))
             line.set_data(track.x[:shown], track.y[:shown])
@@ -522,229 +458,3 @@ def animate_path(tracks: Tracks, fps: float = 15.0, speed: float = 1.0) -> FuncA
     # The animation keeps the figure; closing it keeps a notebook from also showing it still.
     plt.close(fig)
     return anim
-
-
-def save_figure(fig: Figure, path: Union[str, Path]) -> Path:
-    """Save ``fig`` as PNG, SVG or PDF, chosen by the suffix of ``path``.
-
-    Args:
-        fig: the figure to save.
-        path: the file to write, ending in .png, .svg or .pdf; its folder must exist.
-
-    Returns:
-        The path written.
-
-    Raises:
-        DuckielibError: if the suffix is none of those, the folder does not exist, or the file
-            cannot be written.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix not in _FIGURE_FORMATS:
-        raise DuckielibError(
-            f"Cannot save the figure as {str(path)!r}: use a name ending in .png, .svg or .pdf."
-        )
-    if not path.parent.is_dir():
-        raise DuckielibError(
-            f"Cannot save the figure as {str(path)!r}: the folder {str(path.parent)!r} does not "
-            f"exist; create it first or choose another path."
-        )
-    try:
-        fig.savefig(path, format=suffix[1:], dpi=150 if suffix == ".png" else "figure")
-    except OSError as error:
-        raise DuckielibError(
-            f"Cannot save the figure as {str(path)!r}: {error.strerror or error}; check that "
-            f"you may write there."
-        ) from error
-    return path
-
-
-def save_animation(
-    anim: FuncAnimation, path: Union[str, Path], fps: float = 15.0, dpi: float = 72.0
-) -> Path:
-    """Save an animation from :func:`animate_path` as an animated GIF, and return the path.
-
-    The file appears whole or not at all: it is written under another name first.
-
-    Args:
-        anim: the animation.
-        path: the ``.gif`` to write.
-        fps: frames per second of the GIF (give the ``fps`` the animation was made with).
-        dpi: resolution; the animation's figure is 6 x 6 inches.
-
-    Raises:
-        DuckielibError: if ``path`` does not end in ``.gif`` or its folder does not exist.
-    """
-    from matplotlib.animation import PillowWriter
-
-    path = Path(path)
-    if path.suffix.lower() != ".gif":
-        raise DuckielibError(f"{path} must end in .gif: animations are saved as GIFs.")
-    if not path.parent.is_dir():
-        raise DuckielibError(f"There is no folder {path.parent} to write {path.name} into.")
-    partial = path.with_name(path.stem + ".partial.gif")
-    anim.save(str(partial), writer=PillowWriter(fps=fps), dpi=dpi)
-    partial.replace(path)
-    return path
-
-
-def plot_mission_states(mission: Mission, ax: Optional[Axes] = None) -> Axes:
-    """Draw a mission's states as boxes in their LED colours, joined by their transitions.
-
-    Each box holds the state's name, its colour and its moves; each arrow says when the state
-    moves on (after its stop, or when its moves are done).
-
-    Args:
-        mission: the mission (:mod:`duckielib.missions`).
-        ax: the axes to draw on; a new figure when None.
-
-    Returns:
-        The axes drawn on.
-    """
-    if ax is None:
-        ax = _Figure(figsize=(13, 3.2), layout="constrained").add_subplot()
-    width, gap = 1.6, 0.7
-    end = 0.0
-    for index, state in enumerate(mission.states):
-        left = index * (width + gap)
-        fill = pattern_colors(pattern_named(state.color))[0]
-        ax.add_patch(Rectangle((left, 0), width, 1, facecolor=fill, alpha=0.35, edgecolor="black"))
-        moves = "\n".join(describe_move(move) for move in state.moves)
-        text = f"{state.name}\n({state.color})\n\n{moves}"
-        ax.text(left + width / 2, 0.95, text, ha="center", va="top", fontsize=8)
-        label = f"after {state.stop_seconds:g} s" if state.is_stop else "moves\ndone"
-        end = left + width + gap
-        ax.annotate("", (end, 0.5), (left + width, 0.5), arrowprops={"arrowstyle": "->"})
-        ax.text(left + width + gap / 2, 0.56, label, ha="center", va="bottom", fontsize=7)
-    ax.text(end + 0.05, 0.5, "done", va="center", fontsize=9, fontweight="bold")
-    ax.set_xlim(-0.1, end + 0.6)
-    ax.set_ylim(-0.05, 1.05)
-    ax.set_title(f"{mission.name}: {mission.description}", fontsize=10)
-    ax.axis("off")
-    return ax
-
-
-#: The boxes of :func:`plot_mission_nodes`: name -> (x, y, text, whose node it is).
-_MISSION_BOXES = {
-    "encoders": (0.0, 2.0, "left/right_wheel_encoder_node\n[the robot]", "robot"),
-    "odometry": (4.5, 2.0, "odometry_node\n[your 05 functions]", "yours"),
-    "mission": (9.0, 2.0, "mission_node\n[yours: notebook 09]", "yours"),
-    "wheels": (13.6, 2.0, "car_cmd_switch_node\n→ the wheels\n[the robot]", "robot"),
-    "light": (9.0, 0.0, "light_service_node\n[yours: notebook 08]", "yours"),
-    "leds": (13.6, 0.0, "led_emitter_node\n[the robot]", "robot"),
-    "bag": (9.0, 3.6, "the bag, the grader\n[run_mission]", "runner"),
-}
-#: Its links: (from, to, topic or service name, whether it is a service call).
-_MISSION_LINKS = (
-    ("encoders", "odometry", "~tick", False),
-    ("odometry", "mission", "odometry_node/pose", False),
-    ("mission", "wheels", "car_cmd_switch_node/cmd", False),
-    ("mission", "light", "light_service_node/set_color", True),
-    ("mission", "light", "shutdown", False),
-    ("light", "leds", "led_emitter_node/set_pattern", True),
-    ("mission", "bag", "~state", False),
-)
-_BOX_FILL = {"yours": "#ffe9a8", "robot": "#e4e4e4", "runner": "#f6f6f6"}
-
-
-def plot_mission_nodes(ax: Optional[Axes] = None) -> Axes:
-    """Draw the nodes of a mission run and how they talk: topics solid, service calls dashed.
-
-    Yellow boxes are the student's nodes, grey ones the robot's drivers; names are relative to
-    the robot's namespace ``/VEH/``.
-
-    Args:
-        ax: the axes to draw on; a new figure when None.
-
-    Returns:
-        The axes drawn on.
-    """
-    if ax is None:
-        ax = _Figure(figsize=(13, 4.2)).add_axes((0, 0, 1, 1))
-    boxes = {
-        name: ax.text(
-            x,
-            y,
-            text,
-            ha="center",
-            va="center",
-            fontsize=9,
-            bbox={"boxstyle": "round,pad=0.5", "facecolor": _BOX_FILL[whose]},
-        )
-        for name, (x, y, text, whose) in _MISSION_BOXES.items()
-    }
-    for source, target, label, service in _MISSION_LINKS:
-        (x0, y0, _, _), (x1, y1, _, _) = _MISSION_BOXES[source], _MISSION_BOXES[target]
-        # Two links join the mission and the light service: side by side, not on top.
-        shift = (-0.5 if service else 0.5) if (source, target) == ("mission", "light") else 0.0
-        color = "tab:blue" if service else "black"
-        ax.annotate(
-            "",
-            (x1 + shift, y1),
-            (x0 + shift, y0),
-            arrowprops={
-                "arrowstyle": "-|>",
-                "linestyle": "--" if service else "-",
-                "color": color,
-                "patchA": boxes[source].get_bbox_patch(),
-                "patchB": boxes[target].get_bbox_patch(),
-            },
-        )
-        if y0 == y1:
-            ax.text(
-                (x0 + x1) / 2, y0 + 0.12, label, ha="center", va="bottom", fontsize=8, color=color
-            )
-        else:
-            ax.text(
-                x0 + shift + (0.1 if shift >= 0 else -0.1),
-                (y0 + y1) / 2,
-                label,
-                ha="left" if shift >= 0 else "right",
-                va="center",
-                fontsize=8,
-                color=color,
-            )
-    ax.set_xlim(-1.7, 15.1)
-    ax.set_ylim(-0.7, 4.2)
-    ax.text(
-        -1.5,
-        -0.55,
-        "solid: a topic (publisher → subscriber)\ndashed: a service call (client → server)",
-        fontsize=8,
-    )
-    ax.axis("off")
-    return ax
-
-
-def plot_topic_ends(
-    ends: Mapping[str, Tuple[Sequence[str], Sequence[str]]], ax: Optional[Axes] = None
-) -> Axes:
-    """Draw each topic with the nodes that publish to it (left) and subscribe to it (right).
-
-    Args:
-        ends: ``{topic: (publishers, subscribers)}``, node names as ``rosnode list`` gives them.
-        ax: the axes to draw on; a new figure when None.
-
-    Returns:
-        The axes drawn on.
-    """
-    if ax is None:
-        ax = _Figure(figsize=(13, 0.9 * len(ends) + 0.3)).add_axes((0, 0, 1, 1))
-    node_box = {"boxstyle": "round", "facecolor": "#cfe2f3"}
-    topic_box = {"boxstyle": "square", "facecolor": "#fce5cd"}
-    arrow = {"arrowstyle": "->", "shrinkA": 4, "shrinkB": 4}
-    for row, (topic, (publishers, subscribers)) in enumerate(ends.items()):
-        middle = ax.text(0.5, -row, topic, ha="center", va="center", bbox=topic_box, size=9)
-        left, right = (
-            ax.text(x, -row, "\n".join(nodes) or "(nobody)", ha="center", va="center",
-                    bbox=node_box, size=9)
-            for x, nodes in ((0.1, publishers), (0.9, subscribers))
-        )  # fmt: skip
-        for start, end in ((left, middle), (middle, right)):
-            ax.annotate(
-                "", xy=(0, 0.5), xycoords=end, xytext=(1, 0.5), textcoords=start, arrowprops=arrow
-            )
-    ax.set_xlim(-0.05, 1.05)
-    ax.set_ylim(-len(ends) + 0.5, 0.5)
-    ax.axis("off")
-    return ax

@@ -1,21 +1,24 @@
-"""Drawing the virtual Duckiebot with matplotlib: the mat, the robot and its LEDs, its paths.
+"""The simulator's world: the mat, the robot and its LEDs, and its recorded runs.
 
-This is the simulator's only module that imports matplotlib, and the simulator imports it only
-when asked to draw. Everything is drawn in the world frame, in metres, seen from above, with
-equal scales on both axes.
-
+- :func:`draw_mat`: the mat's tiles (:func:`~duckielib.plots.canvas.draw_tile_grid`, as the
+  mat looks) and its walls.
+- :func:`draw_robot`: the robot at a pose, with its five LEDs in their colours.
 - :func:`plot_run`: a figure of a run: the mat, the true path, the robot where it ended, and an
   estimated path (for example from odometry) when given.
 - :func:`animate_run`: the same as an animation; :func:`animation_html` turns it into HTML
-  that plays inline in a notebook, :func:`save_animation` writes a GIF (with Pillow) or an MP4
-  (when ffmpeg is installed).
+  that plays inline in a notebook, :func:`~duckielib.plots.save_animation` writes it to a file.
+
+Everything is drawn in the world frame, in metres, seen from above, with equal scales on both
+axes. This module reads the simulator (:mod:`duckielib.sim`) but the simulator never imports
+it: a notebook draws a run with ``plot_run(bot.sim)``. Like every module of
+:mod:`duckielib.plots`, the library's only package that imports matplotlib, it runs on the
+laptop only.
 """
 
 from __future__ import annotations
 
 import math
-from pathlib import Path
-from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple
 
 import numpy as np
 from matplotlib import animation, patches
@@ -23,10 +26,12 @@ from matplotlib import pyplot as plt
 
 from duckielib.config import RobotConfig
 from duckielib.errors import SimulationError
+from duckielib.plots.canvas import draw_tile_grid
 from duckielib.sim.robot import AXLE_TO_FRONT_FRACTION
 from duckielib.sim.world import WALL_THICKNESS, World
 
 if TYPE_CHECKING:
+    from matplotlib.artist import Artist
     from matplotlib.axes import Axes
 
     from duckielib.sim.simulator import Simulator
@@ -37,13 +42,10 @@ __all__ = [
     "plot_run",
     "animate_run",
     "animation_html",
-    "save_animation",
 ]
 
 RGB = Tuple[float, float, float]
 
-_TILE_COLORS = ("#3a3a3e", "#48484d")
-_LINE_COLOR = "#e8e8dc"
 _WALL_COLOR = "#966e46"
 _TRUE_COLOR = "#1f77b4"
 _ESTIMATE_COLOR = "#ff7f0e"
@@ -52,21 +54,9 @@ _LED_RADIUS = 0.012
 
 def draw_mat(ax: Axes, world: World) -> None:
     """Draw the mat's tiles, their borders and the walls on ``ax``, and fit the view to them."""
-    size = world.tile_size
-    for i in range(world.tiles_x):
-        for j in range(world.tiles_y):
-            ax.add_patch(
-                patches.Rectangle(
-                    (i * size, j * size),
-                    size,
-                    size,
-                    facecolor=_TILE_COLORS[(i + j) % 2],
-                    edgecolor="none",
-                    zorder=0,
-                )
-            )
-    for start, end in world.grid_lines():
-        ax.plot((start[0], end[0]), (start[1], end[1]), color=_LINE_COLOR, linewidth=1.5, zorder=1)
+    draw_tile_grid(
+        ax, (0.0, world.width), (0.0, world.height), on_mat=True, tile_size=world.tile_size
+    )
     margin = 0.05
     if world.walls:
         ax.add_patch(
@@ -147,15 +137,15 @@ class _RobotArtist:
         for artist in (self.chassis, *self.wheels, *self.leds):
             ax.add_patch(artist)
 
-    def update(self, pose: Sequence[float], led_colors: Optional[Sequence[RGB]]) -> List[object]:
+    def update(self, pose: Sequence[float], led_colors: Optional[Sequence[RGB]]) -> List[Artist]:
         self.chassis.set_xy(_to_world(self.chassis_local, pose))
-        for patch, local in zip(self.wheels, self.wheels_local):
-            patch.set_xy(_to_world(local, pose))
+        for wheel, local in zip(self.wheels, self.wheels_local):
+            wheel.set_xy(_to_world(local, pose))
         centres = _to_world(self.leds_local, pose)
         colors = led_colors if led_colors is not None else [(0.0, 0.0, 0.0)] * len(self.leds)
-        for patch, centre, color in zip(self.leds, centres, colors):
-            patch.set_center((float(centre[0]), float(centre[1])))
-            patch.set_facecolor(tuple(float(c) for c in color))
+        for led, centre, (red, green, blue) in zip(self.leds, centres, colors):
+            led.set_center((float(centre[0]), float(centre[1])))
+            led.set_facecolor((float(red), float(green), float(blue)))
         return [self.chassis, *self.wheels, *self.leds]
 
 
@@ -164,7 +154,7 @@ def draw_robot(
     pose: Sequence[float],
     config: RobotConfig,
     led_colors: Optional[Sequence[RGB]] = None,
-) -> List[object]:
+) -> List[Artist]:
     """Draw the robot at ``pose`` (x, y, theta in metres and radians) with its LEDs.
 
     Args:
@@ -276,10 +266,10 @@ def animate_run(
     title = ax.set_title("")
     ax.legend(loc="upper right")
 
-    def frame(number: int) -> List[object]:
+    def frame(number: int) -> List[Artist]:
         index = int(indices[number])
         true_line.set_data(poses[: index + 1, 0], poses[: index + 1, 1])
-        artists: List[object] = [true_line, title]
+        artists: List[Artist] = [true_line, title]
         if estimate_line is not None and points is not None:
             fraction = 1.0 if duration <= 0 else (times[index] - times[0]) / duration
             shown = max(1, math.ceil(fraction * len(points)))
@@ -299,30 +289,3 @@ def animate_run(
 def animation_html(anim: animation.FuncAnimation) -> str:
     """The animation as self-contained HTML (JavaScript player) that plays inline in Jupyter."""
     return anim.to_jshtml()
-
-
-def save_animation(
-    anim: animation.FuncAnimation, path: Union[str, Path], fps: float = 15.0
-) -> Path:
-    """Write the animation to ``path``: ``.gif`` (needs Pillow) or ``.mp4`` (needs ffmpeg).
-
-    Raises:
-        SimulationError: if the suffix is neither, or no writer for it is installed.
-    """
-    path = Path(path)
-    suffix = path.suffix.lower()
-    if suffix == ".gif":
-        writer: animation.AbstractMovieWriter = animation.PillowWriter(fps=fps)
-    elif suffix == ".mp4":
-        if not animation.writers.is_available("ffmpeg"):
-            raise SimulationError(
-                "Saving an MP4 needs ffmpeg, which is not installed; install it (for example "
-                "`apt install ffmpeg`) or save a .gif instead."
-            )
-        writer = animation.FFMpegWriter(fps=fps)
-    else:
-        raise SimulationError(
-            f"Cannot save an animation as {path.name!r}; use a .gif or .mp4 file name."
-        )
-    anim.save(str(path), writer=writer)
-    return path

@@ -133,7 +133,7 @@ class _Actor:
         #: A Ctrl-C that reached the node's code (greenlets run in the driving thread).
         self.interrupt: Optional[KeyboardInterrupt] = None
         self.stack: List[Node] = []  # the nodes whose callbacks run inside this node's code
-        self.label = launch.get("name") or getattr(target, "__name__", "node")
+        self.label = str(launch.get("name") or getattr(target, "__name__", "node"))
         self.thread: Optional[threading.Thread] = None
         self.greenlet: Any = None
         self.home: Optional[int] = None  # the thread a greenlet runs in

@@ -18,7 +18,7 @@ Results are ordinary Python values (lists and strings) that display as the termi
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Type
 
 from duckielib import messages
 from duckielib.errors import UnknownTypeError
@@ -98,7 +98,7 @@ def _listen(
     return record
 
 
-def _nested_messages(message_class: type, fields: Dict[str, Any]) -> Dict[str, Any]:
+def _nested_messages(message_class: Type[Message], fields: Dict[str, Any]) -> Dict[str, Any]:
     """``fields`` with dicts given for message-typed fields turned into those messages.
 
     ``rosservice call`` takes YAML such as ``pattern_name: {data: RED}``; here the same is

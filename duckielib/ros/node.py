@@ -2,12 +2,12 @@
 
 Node code never uses these classes directly: it calls rospy's functions
 (:mod:`duckielib.ros.rospy`), which find the calling node (:mod:`duckielib.ros.context`) and
-act on it. A node knows its graph only as a :class:`Host`: the few things it asks of it.
+act on it. A node knows its graph only as a ``Host``: the few things it asks of it.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple, Type
 
 from duckielib.ros import names
 from duckielib.ros.context import node_context
@@ -17,14 +17,27 @@ from duckielib.ros.log import ERROR, INFO, format_error
 if TYPE_CHECKING:
     from typing import Protocol
 
+    from duckielib.messages.message import Message, Service
+
     class Host(Protocol):
-        """What a node needs of the graph it lives on."""
+        """What a node, and rospy's handles of it, need of the graph they live on."""
 
         topics: Dict[str, TopicRecord]
         services: Dict[str, ServiceRecord]
 
         @property
         def time(self) -> float: ...
+
+        @property
+        def now_ns(self) -> int: ...
+
+        def schedule(self, t_ns: int, action: Callable[[], None]) -> Any: ...
+
+        def call_soon(self, action: Callable[[], None]) -> Any: ...
+
+        def block(
+            self, deadline_ns: Optional[int], predicate: Callable[[], bool], polled: bool = True
+        ) -> bool: ...
 
         def log_message(self, level: int, node: str, text: str) -> None: ...
 
@@ -39,7 +52,7 @@ __all__ = ["Node", "ServiceRecord", "TopicRecord"]
 class TopicRecord:
     """What the master knows of a topic: its type, publishers, subscribers, latched messages."""
 
-    def __init__(self, name: str, data_class: type) -> None:
+    def __init__(self, name: str, data_class: Type[Message]) -> None:
         self.name = name
         self.data_class = data_class
         self.publishers: List[Any] = []
@@ -72,7 +85,7 @@ class TopicRecord:
             "latching": "1" if any(publisher.latch for publisher in self.publishers) else "0",
         }
 
-    def check_type(self, data_class: type, role: str, node: str) -> None:
+    def check_type(self, data_class: Type[Message], role: str, node: str) -> None:
         """Refuse a publisher or subscriber whose message type differs from the topic's.
 
         A subscriber with ``AnyMsg`` accepts any type; a topic known only to such subscribers
@@ -102,7 +115,7 @@ class ServiceRecord:
     def __init__(
         self,
         name: str,
-        service_class: type,
+        service_class: Type[Service],
         handler: Callable[[Any], Any],
         node: Node,
         error_handler: Optional[Callable[..., Any]],
@@ -183,7 +196,7 @@ class Node:
             self.log(level, text)
 
     # -- connections ------------------------------------------------------------------------
-    def topic(self, name: str, data_class: type, role: str) -> TopicRecord:
+    def topic(self, name: str, data_class: Type[Message], role: str) -> TopicRecord:
         """The record of topic ``name`` (created if new), after checking its type."""
         record = self.graph.topics.get(name)
         if record is None:

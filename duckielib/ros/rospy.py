@@ -24,11 +24,12 @@ from __future__ import annotations
 import collections
 import os
 import sys
-from typing import Any, Callable, Deque, List, Optional, Union
+from typing import Any, Callable, Deque, List, Optional, Type, Union
 
 from duckielib import rostime
 from duckielib.errors import MessageError
 from duckielib.messages import Message
+from duckielib.messages import Service as ServiceType
 from duckielib.ros import names
 from duckielib.ros.context import current_node, node_context, node_stack
 from duckielib.ros.exceptions import (
@@ -395,7 +396,8 @@ def spin() -> None:
 
 # -- topics -------------------------------------------------------------------------------------
 def _check_data_class(data_class: Any, what: str) -> None:
-    if not (isinstance(data_class, type) and getattr(data_class, "_md5sum", "")):
+    md5sum = getattr(data_class, "_md5sum", None) if isinstance(data_class, type) else None
+    if not md5sum:
         raise ValueError(
             f"{what} needs a message class such as String or WheelsCmdStamped, not {data_class!r}."
         )
@@ -408,7 +410,7 @@ def _check_dt_options(what: str, options: dict) -> None:
         raise TypeError(f"{what}() got an unexpected keyword argument {unknown[0]!r}")
 
 
-def _to_message(data_class: type, args: tuple, kwds: dict) -> Any:
+def _to_message(data_class: Type[Message], args: tuple, kwds: dict) -> Any:
     """Build the message ``publish(...)`` or a service call means, as rospy does."""
     if args and kwds:
         raise TypeError("publish() can be called with arguments or keywords, but not both.")
@@ -443,7 +445,7 @@ class Publisher:
     def __init__(
         self,
         name: str,
-        data_class: type,
+        data_class: Type[Message],
         subscriber_listener: Any = None,
         tcp_nodelay: bool = False,
         latch: bool = False,
@@ -489,6 +491,7 @@ class Publisher:
         if self._record is None:
             raise ROSException(f"publish() to an unregistered() handle (topic {self.name}).")
         try:
+            message: Any
             if len(args) == 1 and not kwds and type(args[0]) is self.data_class:
                 message = args[0]  # the common case, without the checks _to_message makes
             else:
@@ -538,7 +541,7 @@ class Subscriber:
     def __init__(
         self,
         name: str,
-        data_class: type,
+        data_class: Union[Type[Message], Type[AnyMsg]],
         callback: Optional[Callable[..., Any]] = None,
         callback_args: Any = None,
         queue_size: Optional[int] = None,
@@ -616,7 +619,7 @@ class Subscriber:
         self._node.forget_topic_user(record)
 
 
-def wait_for_message(topic: str, topic_type: type, timeout: Optional[float] = None) -> Any:
+def wait_for_message(topic: str, topic_type: Type[Message], timeout: Optional[float] = None) -> Any:
     """Wait for the next message on a topic and return it.
 
     Raises:
@@ -654,7 +657,7 @@ class Service:
     def __init__(
         self,
         name: str,
-        service_class: type,
+        service_class: Type[ServiceType],
         handler: Callable[[Any], Any],
         buff_size: int = 65536,
         error_handler: Optional[Callable[..., Any]] = None,
@@ -692,7 +695,7 @@ class Service:
         spin()
 
 
-def _response_from(value: Any, response_class: type) -> Any:
+def _response_from(value: Any, response_class: Type[Message]) -> Any:
     if isinstance(value, Message) and value._type == response_class._type:
         return value
     if isinstance(value, dict):
@@ -717,7 +720,11 @@ class ServiceProxy:
     """
 
     def __init__(
-        self, name: str, service_class: type, persistent: bool = False, headers: Any = None
+        self,
+        name: str,
+        service_class: Type[ServiceType],
+        persistent: bool = False,
+        headers: Any = None,
     ) -> None:
         _check_service_class(service_class, "rospy.ServiceProxy")
         self._node: Node = current_node("rospy.ServiceProxy")

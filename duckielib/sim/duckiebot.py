@@ -109,11 +109,12 @@ class VirtualDuckiebot:
     def _start_drivers(self) -> None:
         sim, veh = self.sim, self.namespace
         self._host("wheels_driver_node", lambda: drivers.WheelsDriverNode(rospy, sim, veh))
+
+        def encoder(wheel: str) -> Callable[[], drivers.WheelEncoderNode]:
+            return lambda: drivers.WheelEncoderNode(rospy, sim, veh, wheel)
+
         encoders = {
-            wheel: self._host(
-                f"{wheel}_wheel_encoder_node",
-                lambda wheel=wheel: drivers.WheelEncoderNode(rospy, sim, veh, wheel),
-            )
+            wheel: self._host(f"{wheel}_wheel_encoder_node", encoder(wheel))
             for wheel in ("left", "right")
         }
         self._host("kinematics_node", lambda: drivers.KinematicsNode(rospy, veh, sim.config))
@@ -209,10 +210,6 @@ class VirtualDuckiebot:
     def shutdown(self) -> None:
         """Stop every node: the wheels stop and the LEDs go off, as when the robot shuts down."""
         self.graph.shutdown("the virtual Duckiebot was shut down")
-
-    def plot(self, estimate: Optional[Any] = None, ax: Optional[Any] = None) -> Any:
-        """Draw the mat, the true path and the robot (see :meth:`Simulator.plot`)."""
-        return self.sim.plot(estimate=estimate, ax=ax)
 
     def __repr__(self) -> str:
         x, y, theta = self.sim.pose

@@ -435,25 +435,3 @@ class Simulator:
         if self._frame is None or self._frame[0] != index:
             self._frame = (index, camera.encode_jpeg(camera.render(self.pose)))
         return self._frame[1]
-
-    # Drawing (matplotlib is imported only here, when asked).
-
-    def plot(self, estimate: Optional[Any] = None, ax: Optional[Any] = None) -> Any:
-        """Draw the mat, the true path, the robot with its LEDs and an optional estimate.
-
-        Args:
-            estimate: an estimated path, shape (N, 2) or (N, 3) of x, y (and theta).
-            ax: matplotlib axes to draw on; a new figure when None.
-
-        Returns:
-            The matplotlib axes.
-        """
-        from duckielib.plots import world as draw
-
-        return draw.plot_run(self, estimate=estimate, ax=ax)
-
-    def animate(self, estimate: Optional[Any] = None, fps: float = 15.0) -> Any:
-        """An animation of the recorded run (see :func:`duckielib.plots.world.animate_run`)."""
-        from duckielib.plots import world as draw
-
-        return draw.animate_run(self, estimate=estimate, fps=fps)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import ast
 import inspect
 import linecache
+import os
 import sys
 import textwrap
 import types
@@ -106,7 +107,7 @@ def _unfinished_in_module(source: str) -> List[str]:
 
 
 def load_solution(
-    path: Union[str, Path, None] = None, required: Iterable[str] = ODOMETRY_PARTS
+    path: Union[str, os.PathLike[str], None] = None, required: Iterable[str] = ODOMETRY_PARTS
 ) -> types.ModuleType:
     """Load a solution: an exported module, or a folder of notebooks exported on the fly.
 

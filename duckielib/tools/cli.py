@@ -12,7 +12,7 @@ import os
 import signal
 import sys
 import threading
-from typing import Callable, Iterator, List, Optional
+from typing import Any, Callable, Dict, Iterator, List, Optional
 
 from duckielib.errors import DuckielibError
 
@@ -271,7 +271,7 @@ def _parser() -> argparse.ArgumentParser:
     info.add_argument("bag", help="the bag file")
     info.set_defaults(handler=_bag_info)
 
-    time_base = {
+    time_base: Dict[str, Any] = {
         "choices": ("auto", "header", "record"),
         "default": "auto",
         "help": "times to use: header stamps, record times, or auto (stamps unless all 0)",

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from duckielib.errors import SimulationError
-from duckielib.plots import world as draw
-from duckielib.sim import Simulator
+from duckielib import plots
+from duckielib.errors import DuckielibError, SimulationError
+from duckielib.sim import Simulator, VirtualDuckiebot
 
 
 def test_frame_is_a_640x480_jpeg():
@@ -55,7 +55,7 @@ def test_plot_writes_a_png(tmp_path):
     sim.set_wheel_duties(0.5, 0.4)
     sim.run_until(2.0)
     estimate = sim.trace.poses() + 0.02
-    ax = sim.plot(estimate=estimate)
+    ax = plots.plot_run(sim, estimate=estimate)
     labels = [line.get_label() for line in ax.get_lines()]
     assert "true" in labels
     assert "estimate" in labels
@@ -68,7 +68,7 @@ def test_plot_writes_a_png(tmp_path):
 def test_estimate_of_the_wrong_shape_is_rejected():
     sim = Simulator(seed=2)
     with pytest.raises(SimulationError, match=r"shape \(N, 2\) or \(N, 3\)"):
-        sim.plot(estimate=[1.0, 2.0, 3.0])
+        plots.plot_run(sim, estimate=[1.0, 2.0, 3.0])
     matplotlib.pyplot.close("all")
 
 
@@ -77,31 +77,37 @@ def test_animation_plays_as_html_and_saves_as_gif(tmp_path):
     sim.set_led_pattern("CAR_SIGNAL_A")
     sim.set_wheel_duties(0.5, 0.3)
     sim.run_until(1.0)
-    anim = draw.animate_run(sim, estimate=sim.trace.poses()[:, :2], fps=5)
-    html = draw.animation_html(anim)
+    anim = plots.animate_run(sim, estimate=sim.trace.poses()[:, :2], fps=5)
+    html = plots.animation_html(anim)
     assert "<script" in html
     assert "Animation" in html
-    gif = draw.save_animation(anim, tmp_path / "run.gif", fps=5)
+    gif = plots.save_animation(anim, tmp_path / "run.gif", fps=5)
     assert gif.read_bytes()[:6] in (b"GIF89a", b"GIF87a")
-    with pytest.raises(SimulationError, match=r"\.gif or \.mp4"):
-        draw.save_animation(anim, tmp_path / "run.avi")
+    with pytest.raises(DuckielibError, match=r"\.gif or \.mp4"):
+        plots.save_animation(anim, tmp_path / "run.avi")
+    assert [item.name for item in tmp_path.iterdir()] == ["run.gif"]
 
 
 def test_mp4_needs_ffmpeg(tmp_path):
     sim = Simulator(seed=2, trace_rate_hz=5)
     sim.run_until(0.4)
-    anim = sim.animate(fps=5)
+    anim = plots.animate_run(sim, fps=5)
     if matplotlib.animation.writers.is_available("ffmpeg"):
-        assert draw.save_animation(anim, tmp_path / "run.mp4").stat().st_size > 0
+        mp4 = plots.save_animation(anim, tmp_path / "run.mp4", fps=5)
+        assert mp4.stat().st_size > 0
+        assert mp4.read_bytes()[4:8] == b"ftyp"
     else:
-        with pytest.raises(SimulationError, match="ffmpeg"):
-            draw.save_animation(anim, tmp_path / "run.mp4")
-        assert "<script" in draw.animation_html(anim)
+        with pytest.raises(DuckielibError, match="ffmpeg"):
+            plots.save_animation(anim, tmp_path / "run.mp4")
+        assert "<script" in plots.animation_html(anim)
+    assert [item.name for item in tmp_path.iterdir()] == (
+        ["run.mp4"] if matplotlib.animation.writers.is_available("ffmpeg") else []
+    )
 
 
 def test_nothing_recorded_cannot_be_animated():
     with pytest.raises(SimulationError, match="trace_rate_hz"):
-        draw.animate_run(Simulator(trace_rate_hz=0))
+        plots.animate_run(Simulator(trace_rate_hz=0))
 
 
 def test_importing_the_simulator_loads_no_plotting_or_imaging():
@@ -115,3 +121,18 @@ def test_importing_the_simulator_loads_no_plotting_or_imaging():
         [sys.executable, "-c", script], capture_output=True, text=True, check=True
     )
     assert result.stdout.strip() == "[]"
+
+
+def test_the_simulator_leaves_drawing_to_the_plots():
+    from import_graph import graph
+
+    # The simulator never imports the plots (its example scripts are users of both).
+    arrows = [
+        arrow
+        for arrow in graph().arrows("duckielib.sim", "duckielib.plots")
+        if not arrow.startswith("duckielib.sim.examples.")
+    ]
+    assert arrows == []
+    for drawn in (Simulator, VirtualDuckiebot):
+        assert not hasattr(drawn, "plot")
+        assert not hasattr(drawn, "animate")

@@ -156,8 +156,13 @@ class SquareRun:
         import matplotlib
 
         matplotlib.use("Agg")
-        ax = self.sim.plot()
-        ax.figure.savefig(path, dpi=120, bbox_inches="tight")
+        from matplotlib import pyplot as plt
+
+        from duckielib.plots import plot_run
+
+        figure, ax = plt.subplots(figsize=(6, 6))
+        plot_run(self.sim, ax=ax)
+        figure.savefig(path, dpi=120, bbox_inches="tight")
 
 
 def _wrapped(angles: np.ndarray) -> np.ndarray:

@@ -24,7 +24,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
-from typing import List, Tuple
+from typing import Any, Callable, List, Tuple, TypeVar
 
 import numpy as np
 
@@ -39,10 +39,13 @@ _RATE_HZ = 30.0
 _RIGHT_OFFSET_NS = 4_000_000
 _START_NS = 1_700_000_000_000_000_000
 _RESOLUTION = 135
+# A constant of the .msg definition, which a type checker cannot see.
+_INCREMENTAL: int = WheelEncoderStamped.ENCODER_TYPE_INCREMENTAL  # type: ignore[attr-defined]
 _LEFT = "/db1/left_wheel_encoder_node/tick"
 _RIGHT = "/db1/right_wheel_encoder_node/tick"
 _SYSTEM_PYTHON = Path("/usr/bin/python3")
 _RUNS = 3
+_T = TypeVar("_T")
 
 #: Runs in Debian's Python: reads the bag's encoder topics, prints its own elapsed seconds.
 _ROSBAG_SCRIPT = """
@@ -95,7 +98,7 @@ def _write_bag(path: Path) -> float:
                     header=Header(seq=index, stamp=Time.from_nsec(stamp_ns), frame_id=frame),
                     data=int(ticks[index]),
                     resolution=_RESOLUTION,
-                    type=WheelEncoderStamped.ENCODER_TYPE_INCREMENTAL,
+                    type=_INCREMENTAL,
                 )
                 # Recorded 1.2 ms after the stamp, as a recorder on the robot would.
                 writer.write(topic, message, stamp_ns + 1_200_000)
@@ -104,10 +107,9 @@ def _write_bag(path: Path) -> float:
     return time.perf_counter() - start
 
 
-def _best(function, *args) -> Tuple[float, object]:
+def _best(function: Callable[..., _T], *args: Any) -> Tuple[float, _T]:
     """Best wall-clock seconds of three calls, and the last call's result."""
     best = math.inf
-    result = None
     for _ in range(_RUNS):
         start = time.perf_counter()
         result = function(*args)

@@ -13,7 +13,7 @@ from __future__ import annotations
 import time
 from typing import Dict, List, Tuple
 
-from duckielib.messages import Twist2DStamped, WheelEncoderStamped
+from duckielib.messages import Message, Twist2DStamped, WheelEncoderStamped
 from duckielib.ros import Graph, rospy
 from duckielib.sim import VirtualDuckiebot
 
@@ -34,7 +34,7 @@ def _controller() -> None:
 def _counter(counts: Dict[str, int]) -> None:
     rospy.init_node("tick_counter")
 
-    def count(msg: WheelEncoderStamped, wheel: str) -> None:
+    def count(msg: Message, wheel: str) -> None:
         counts[wheel] += 1
 
     for wheel in ("left", "right"):
