@@ -16,16 +16,39 @@ Scalar fields need no check here: every assignment was checked when it was made.
 from __future__ import annotations
 
 import struct
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Tuple, Type, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Tuple, Type, Union
 
 from duckielib.errors import MessageError
 from duckielib.rostime import NS_PER_S, Duration, Time
 
 if TYPE_CHECKING:
-    from .message import _FieldCodec
+    from typing import Protocol
+
+    from .spec import Field
+
+    class _ElementCodec(Protocol):
+        @property
+        def message_class(self) -> Any: ...  # the nested message's class, for a message field
+
+    class FieldCodec(Protocol):
+        """What the generated code asks of a field's codec (``message._FieldCodec``)."""
+
+        @property
+        def field(self) -> Field: ...
+
+        @property
+        def element(self) -> _ElementCodec: ...
+
+        def default(self) -> Any: ...
+
+        def accept(self, owner: str, value: Any) -> Any: ...
+
+        def write(self, out: bytearray, value: Any) -> None: ...
+
+        def read(self, data: Union[bytes, memoryview], offset: int) -> Tuple[Any, int]: ...
 
     #: The field codecs of a message type, by field name in definition order.
-    Codecs = Dict[str, _FieldCodec]
+    Codecs = Mapping[str, FieldCodec]
 
 __all__ = [
     "FLOAT32_MAX",
