@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Dict, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 from duckielib.errors import ConfigError
 
@@ -244,6 +244,44 @@ def custom_pattern(
                 f"not {list(frequency_mask)!r}."
             )
     return Pattern(name, checked, frequency, mask)
+
+
+def named_pattern(color_list: Sequence[object], frequency: float) -> Optional[Pattern]:
+    """The named pattern whose colour names and blinking frequency these are, or None."""
+    names = tuple(color_list)
+    for name, pattern in PATTERNS.items():
+        if name.islower():
+            continue  # "light_off" is an alias of LIGHT_OFF
+        if pattern.color_list == names and math.isclose(pattern.frequency, frequency, abs_tol=1e-3):
+            return pattern
+    return None
+
+
+def pattern_of_message(
+    color_list: Sequence[str],
+    rgb_vals: Sequence[RGB],
+    frequency: float,
+    frequency_mask: Sequence[int],
+) -> Pattern:
+    """The pattern an ``LEDPattern`` message makes the LEDs show, as the LED driver reads it.
+
+    A message with a named pattern's colour names and frequency (what the emitter sends) is
+    that pattern. Any other shows its ``rgb_vals`` as given, or its colour names when it has
+    no ``rgb_vals``: one colour for all five LEDs, or five by LED index.
+
+    Raises:
+        ConfigError: if the message gives no colour, a number of colours other than one or
+            five, an unknown colour name, or an invalid frequency or mask.
+    """
+    named = named_pattern(color_list, frequency)
+    if named is not None:
+        return named
+    colors: List[Color] = [(float(r), float(g), float(b)) for r, g, b in rgb_vals]
+    if not colors:
+        colors = [str(name) for name in color_list]
+    if not colors:
+        raise ConfigError("An LEDPattern message needs rgb_vals or color_list; it has neither.")
+    return custom_pattern(colors[0] if len(colors) == 1 else colors, frequency, frequency_mask)
 
 
 def _shown(color: Color) -> RGB:

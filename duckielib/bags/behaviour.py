@@ -21,7 +21,7 @@ import numpy as np
 
 from duckielib.bags.analysis import PoseTrack, pose_tracks
 from duckielib.bags.io import Bag, PathLike
-from duckielib.leds import PATTERNS
+from duckielib.leds import named_pattern
 from duckielib.missions import Mission, Pose
 from duckielib.rostime import NS_PER_S
 
@@ -176,15 +176,10 @@ def _rounded(pose: Optional[Pose]) -> Optional[List[float]]:
 
 def _pattern_name(message: Any) -> str:
     """The named pattern whose colours and blinking an ``LEDPattern`` message shows."""
-    colors = tuple(message.color_list)
-    for name, pattern in PATTERNS.items():
-        if name.islower():
-            continue  # "light_off" is an alias of LIGHT_OFF
-        if tuple(pattern.color_list) == colors and math.isclose(
-            pattern.frequency, message.frequency, abs_tol=1e-3
-        ):
-            return name
-    return "custom" if "custom" in colors else "unknown"
+    named = named_pattern(message.color_list, message.frequency)
+    if named is not None:
+        return named.name
+    return "custom" if "custom" in message.color_list else "unknown"
 
 
 def _led_changes(bag: Bag, topic: str) -> List[Tuple[float, str]]:

@@ -488,6 +488,10 @@ class Graph(ParameterServer):
         actor.predicate = None
         return predicate()
 
+    def driving_here(self) -> bool:
+        """Whether the calling thread is running the graph's events (and their callbacks)."""
+        return self._driver == threading.get_ident()
+
     # -- nodes ------------------------------------------------------------------------------
     def current_actor(self) -> Optional[_Actor]:
         """The launched node whose code is calling, if any."""

@@ -39,6 +39,8 @@ if TYPE_CHECKING:
             self, deadline_ns: Optional[int], predicate: Callable[[], bool], polled: bool = True
         ) -> bool: ...
 
+        def driving_here(self) -> bool: ...
+
         def log_message(self, level: int, node: str, text: str) -> None: ...
 
         def node_shut_down(self) -> None: ...
@@ -164,6 +166,8 @@ class Node:
         self.is_shutdown = False
         self.shutdown_reason: Optional[str] = None
         self._log_marks: Dict[Any, float] = {}
+        #: Simulated time its main code owes for rospy calls made without waiting, in ns.
+        self.compute_debt_ns = 0
 
     def __repr__(self) -> str:
         return f"<Node {self.name}{' (shut down)' if self.is_shutdown else ''}>"

@@ -17,6 +17,15 @@ The graph (:class:`~duckielib.ros.graph.Graph`) runs such code on simulated time
 from rospy are deliberate and small: several nodes share one process (each has its own
 ``init_node``); a message published to a topic of another type, or with a bad field value,
 fails at once with a sentence saying why; ``Time.now()`` is the simulator's clock.
+
+Simulated time moves only while every node waits. A node's main code that never waits (a
+loop that polls, ``while distance < goal: pub.publish(cmd)``) is charged
+:data:`CALL_COST_NS` of simulated time for each ``publish``, ``is_shutdown``, ``get_time``,
+``get_rostime`` or ``Time.now`` it calls, and waits whenever it owes a millisecond: its loop
+then runs about ten thousand times per simulated second, and the robot, the clock and the
+other nodes go on meanwhile. Callbacks are not charged. ``time.sleep`` in a node's code waits
+simulated seconds, as ``rospy.sleep`` does, and says so once (importing this module makes
+``time.sleep`` do that; anywhere else it is the wall clock's, as always).
 """
 
 from __future__ import annotations
@@ -24,6 +33,7 @@ from __future__ import annotations
 import collections
 import os
 import sys
+import time
 from typing import Any, Callable, Deque, List, Optional, Type, Union
 
 from duckielib import rostime
@@ -31,7 +41,13 @@ from duckielib.errors import MessageError
 from duckielib.messages import Message
 from duckielib.messages import Service as ServiceType
 from duckielib.ros import names
-from duckielib.ros.context import current_node, node_context, node_stack
+from duckielib.ros.context import (
+    calling_actor,
+    current_node,
+    latest_graph,
+    node_context,
+    node_stack,
+)
 from duckielib.ros.exceptions import (
     ROSException,
     ROSInitException,
@@ -165,7 +181,9 @@ class Time(rostime.Time):
         Raises:
             ROSInitException: before ``rospy.init_node``.
         """
-        return cls(0, current_node("rospy.Time.now()").graph.now_ns)
+        node = current_node("rospy.Time.now()")
+        _spend(node)
+        return cls(0, node.graph.now_ns)
 
 
 def get_rostime() -> Time:
@@ -198,9 +216,39 @@ def sleep(duration: Union[float, rostime.Duration]) -> None:
     span = _to_ns(duration)
     if span <= 0:
         return
-    node.graph.block(node.graph.now_ns + span, lambda: node.is_shutdown, polled=False)
+    _block(node, node.graph.now_ns + span, lambda: node.is_shutdown, polled=False)
     if node.is_shutdown:
         raise ROSInterruptException("ROS shutdown request")
+
+
+#: Simulated time that one rospy call costs the main code of a node that never waits, in ns.
+CALL_COST_NS = 100_000
+#: A node that never waits waits once it owes this much simulated time, in ns.
+_MAX_DEBT_NS = 1_000_000
+
+
+def _block(
+    node: Node, deadline_ns: Optional[int], predicate: Callable[[], bool], polled: bool = True
+) -> bool:
+    """Wait as ``node`` (see :meth:`Graph.block`); a node that waits owes no compute time."""
+    node.compute_debt_ns = 0
+    return node.graph.block(deadline_ns, predicate, polled=polled)
+
+
+def _spend(node: Node) -> None:
+    """Charge ``node``'s main code for one rospy call; make it wait once it owes 1 ms.
+
+    Callbacks, and code that runs while the graph delivers events in this thread, are not
+    charged: only code that could otherwise hold the clock still for ever.
+    """
+    if node.is_shutdown or node_stack():
+        return
+    if calling_actor() is None and node.graph.driving_here():
+        return
+    node.compute_debt_ns += CALL_COST_NS
+    if node.compute_debt_ns >= _MAX_DEBT_NS:
+        owed = node.compute_debt_ns
+        _block(node, node.graph.now_ns + owed, lambda: node.is_shutdown, polled=False)
 
 
 class Rate:
@@ -373,9 +421,11 @@ def resolve_name(name: str, caller_id: Optional[str] = None) -> str:
 def is_shutdown() -> bool:
     """Whether the calling node is shutting down (a loop's signal to stop)."""
     try:
-        return current_node().is_shutdown
+        node = current_node()
     except ROSInitException:
         return current_graph().is_shutdown
+    _spend(node)
+    return node.is_shutdown
 
 
 def signal_shutdown(reason: str) -> None:
@@ -391,7 +441,7 @@ def on_shutdown(hook: Callable[[], Any]) -> None:
 def spin() -> None:
     """Keep the node alive, running its callbacks, until it shuts down."""
     node = current_node("rospy.spin()")
-    node.graph.block(None, lambda: node.is_shutdown, polled=False)
+    _block(node, None, lambda: node.is_shutdown, polled=False)
 
 
 # -- topics -------------------------------------------------------------------------------------
@@ -508,6 +558,7 @@ class Publisher:
             record.latched[self] = data
         for subscriber in list(record.subscribers):
             subscriber._enqueue(data)
+        _spend(self._node)
 
     def get_num_connections(self) -> int:
         """How many subscribers the topic has."""
@@ -583,7 +634,15 @@ class Subscriber:
             self._node.graph.call_soon(self._drain)
 
     def _drain(self) -> None:
-        self._scheduled = False
+        # While a callback runs (even one that sleeps), new messages wait in the queue for
+        # this loop: callbacks of one subscription never overlap, as in rospy, where each
+        # subscription has a thread of its own.
+        try:
+            self._drain_queue()
+        finally:
+            self._scheduled = False
+
+    def _drain_queue(self) -> None:
         queue = self._queue
         stack = node_stack()
         while queue and self._record is not None:
@@ -630,7 +689,7 @@ def wait_for_message(topic: str, topic_type: Type[Message], timeout: Optional[fl
     subscriber = Subscriber(topic, topic_type, received.append, queue_size=1)
     try:
         deadline = None if timeout is None else node.graph.now_ns + _to_ns(timeout)
-        node.graph.block(deadline, lambda: bool(received) or node.is_shutdown)
+        _block(node, deadline, lambda: bool(received) or node.is_shutdown)
     finally:
         subscriber.unregister()
     if not received:
@@ -969,3 +1028,44 @@ logdebug_throttle, loginfo_throttle = _throttled(DEBUG), _throttled(INFO)
 logwarn_throttle, logerr_throttle = _throttled(WARN), _throttled(ERROR)
 logdebug_once, loginfo_once = _once(DEBUG), _once(INFO)
 logwarn_once, logerr_once = _once(WARN), _once(ERROR)
+
+
+# -- time.sleep in node code ----------------------------------------------------------------------
+_WALL_SLEEP: Callable[[float], None] = getattr(time.sleep, "wall_sleep", time.sleep)
+_TIME_SLEEP_NOTE = (
+    "time.sleep() waits on the wall clock, but this graph's time is simulated: here it waits "
+    "simulated seconds, as rospy.sleep() does. Use rospy.sleep() or rospy.Rate in ROS code."
+)
+
+
+def _sleeping_node() -> Optional[Node]:
+    """The in-process node whose code calls ``time.sleep``, or None (then it is wall time)."""
+    stack = node_stack()
+    if stack:
+        return stack[-1]  # a callback
+    actor = calling_actor()
+    if actor is not None:
+        return actor.node  # a launched node's main code (None before init_node)
+    graph = latest_graph()
+    node = graph.foreground_node() if graph is not None else None
+    if node is not None and not node.graph.driving_here():
+        return node  # a notebook's own node
+    return None
+
+
+def _time_sleep(seconds: Any) -> None:
+    node = _sleeping_node()
+    if node is None or node.is_shutdown:
+        _WALL_SLEEP(seconds)
+        return
+    with node_context(node):
+        logwarn_once(_TIME_SLEEP_NOTE)
+    sleep(seconds)
+
+
+_time_sleep.wall_sleep = _WALL_SLEEP  # type: ignore[attr-defined]
+_time_sleep.__doc__ = (
+    "``time.sleep``, except in the code of a node on the in-process graph: there it waits "
+    "simulated seconds, as ``rospy.sleep`` does, and says so once."
+)
+time.sleep = _time_sleep

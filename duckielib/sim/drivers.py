@@ -336,6 +336,48 @@ class LEDEmitterNode:
         self.show(led_tables.pattern_named(led_tables.OFF_PATTERN))
 
 
+class LEDDriverNode:
+    """The LED driver: shows on the five LEDs each pattern sent on ``led_emitter_node/led_pattern``.
+
+    On a Duckiebot the emitter publishes what the LEDs should show and the driver shows it, so
+    a node that publishes an ``LEDPattern`` there (rather than calling the emitter's services)
+    lights the LEDs too. A pattern the LEDs already show is left as it is (the emitter's own
+    messages repeat what it has just set).
+
+    Subscribers:
+        led_emitter_node/led_pattern (LEDPattern): the pattern, by colour names and frequency
+            or by ``rgb_vals`` (see :func:`duckielib.leds.pattern_of_message`).
+    """
+
+    def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
+        self.msg = message_classes(rospy)
+        self.rospy = rospy
+        self.sim = sim
+        self.sub_pattern = rospy.Subscriber(
+            veh + "led_emitter_node/led_pattern", self.msg.LEDPattern, self.on_pattern
+        )
+
+    def on_pattern(self, msg: Any) -> None:
+        """Show the message's pattern; log and ignore one the LEDs cannot show."""
+        try:
+            pattern = led_tables.pattern_of_message(
+                list(msg.color_list),
+                [(c.r, c.g, c.b) for c in msg.rgb_vals],
+                msg.frequency,
+                list(msg.frequency_mask),
+            )
+        except ConfigError as error:
+            self.rospy.logwarn(f"LED pattern ignored: {error}")
+            return
+        shown = self.sim.led_pattern
+        if (
+            led_tables.pattern_colors(pattern) != led_tables.pattern_colors(shown)
+            or pattern.frequency != shown.frequency
+            or pattern.frequency_mask != shown.frequency_mask
+        ):
+            self.sim.show_led_pattern(pattern)
+
+
 class CameraNode:
     """The camera: 640x480 JPEG frames at 30 Hz, rendered only while someone subscribes.
 

@@ -120,6 +120,7 @@ class VirtualDuckiebot:
         self._host("kinematics_node", lambda: drivers.KinematicsNode(rospy, veh, sim.config))
         self._host("car_cmd_switch_node", lambda: drivers.CarCmdSwitchNode(rospy, veh))
         self._host("led_emitter_node", lambda: drivers.LEDEmitterNode(rospy, sim, veh))
+        self._host("led_driver_node", lambda: drivers.LEDDriverNode(rospy, sim, veh))
         camera = self._host("camera_node", lambda: drivers.CameraNode(rospy, sim, veh))
         truth = self._host("simulator_node", lambda: drivers.GroundTruthNode(rospy, sim, veh))
         self._encoders = encoders

@@ -139,6 +139,7 @@ class VirtualDuckiebotNode:
             "kinematics_node": drivers.KinematicsNode(rospy, veh, sim.config),
             "car_cmd_switch_node": drivers.CarCmdSwitchNode(rospy, veh),
             "led_emitter_node": drivers.LEDEmitterNode(rospy, locked, veh),
+            "led_driver_node": drivers.LEDDriverNode(rospy, locked, veh),
             "camera_node": drivers.CameraNode(rospy, locked, veh),
             "simulator_node": drivers.GroundTruthNode(rospy, locked, veh),
         }

@@ -15,6 +15,7 @@ from duckielib.leds import pattern_named
 from duckielib.messages import (
     BoolStamped,
     ChangePattern,
+    ColorRGBA,
     CompressedImage,
     LEDPattern,
     Pose2DStamped,
@@ -26,7 +27,7 @@ from duckielib.messages import (
 )
 from duckielib.ros import Graph, modules, rosnode, rosparam, rospy, rosservice, rostopic
 from duckielib.ros.context import node_context
-from duckielib.ros.log import ERROR
+from duckielib.ros.log import ERROR, WARN
 from duckielib.sim import VirtualDuckiebot
 from duckielib.tools.bench import run_benchmark
 
@@ -101,6 +102,7 @@ def test_topics_services_and_types_are_the_robots(bot):
             "kinematics_node",
             "car_cmd_switch_node",
             "led_emitter_node",
+            "led_driver_node",
             "camera_node",
             "simulator_node",
         )
@@ -285,6 +287,26 @@ def test_led_emitter_starts_white_and_sets_patterns(bot):
     assert patterns[-1].frequency == pytest.approx(pattern_named("CAR_SIGNAL_A").frequency)
     assert patterns[-1].frequency > 0
     assert bot.sim.leds.pattern == "CAR_SIGNAL_A"
+
+
+def test_a_pattern_published_to_the_led_driver_lights_the_leds(bot):
+    # As many Duckiebot nodes do: no service call, an LEDPattern straight on the topic.
+    topic = "/duckiebot/led_emitter_node/led_pattern"
+    red = ColorRGBA(r=1.0, g=0.0, b=0.0, a=1.0)
+    send(bot, topic, LEDPattern(rgb_vals=[red] * 5))
+    assert bot.sim.leds.pattern == "custom"
+    assert bot.sim.leds.colors == ((1.0, 0.0, 0.0),) * 5, "rgb_vals are shown as given"
+    send(bot, topic, LEDPattern(color_list=["green"] * 5), name="sender2")
+    assert bot.sim.leds.pattern == "GREEN", "colour names of a named pattern are that pattern"
+    send(bot, topic, LEDPattern(color_list=["red", "green"]), name="sender3")
+    assert bot.sim.leds.pattern == "GREEN", "two colours for five LEDs: ignored"
+    warnings = [record.text for record in bot.graph.log if record.level == WARN]
+    assert any("LED pattern ignored" in text and "5 colours" in text for text in warnings)
+    shown = len(bot.sim.trace.patterns)
+    call(bot, "/duckiebot/led_emitter_node/set_pattern", ChangePattern, String("BLUE"))
+    bot.run(0.0)
+    assert bot.sim.leds.pattern == "BLUE"
+    assert len(bot.sim.trace.patterns) == shown + 1, "the emitter's own message is not shown twice"
 
 
 def test_unknown_led_pattern_is_logged_and_ignored(bot):
