@@ -80,32 +80,32 @@ class _TimeValue:
         return not self.is_zero()
 
     def __eq__(self, other: object) -> bool:
-        if type(other) is not type(self):
+        if not _same_kind(self, other):
             return NotImplemented
-        return self.to_nsec() == other.to_nsec()
+        return self.to_nsec() == other.to_nsec()  # type: ignore[attr-defined]
 
     def __lt__(self, other: object) -> bool:
-        if type(other) is not type(self):
+        if not _same_kind(self, other):
             return NotImplemented
-        return self.to_nsec() < other.to_nsec()
+        return self.to_nsec() < other.to_nsec()  # type: ignore[attr-defined]
 
     def __le__(self, other: object) -> bool:
-        if type(other) is not type(self):
+        if not _same_kind(self, other):
             return NotImplemented
-        return self.to_nsec() <= other.to_nsec()
+        return self.to_nsec() <= other.to_nsec()  # type: ignore[attr-defined]
 
     def __gt__(self, other: object) -> bool:
-        if type(other) is not type(self):
+        if not _same_kind(self, other):
             return NotImplemented
-        return self.to_nsec() > other.to_nsec()
+        return self.to_nsec() > other.to_nsec()  # type: ignore[attr-defined]
 
     def __ge__(self, other: object) -> bool:
-        if type(other) is not type(self):
+        if not _same_kind(self, other):
             return NotImplemented
-        return self.to_nsec() >= other.to_nsec()
+        return self.to_nsec() >= other.to_nsec()  # type: ignore[attr-defined]
 
     def __hash__(self) -> int:
-        return hash((type(self).__name__, self.to_nsec()))
+        return hash((isinstance(self, Time), self.to_nsec()))
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}[{self.to_nsec()}]"
@@ -200,12 +200,25 @@ class Duration(_TimeValue):
         return NotImplemented
 
     def __floordiv__(self, other: object):
+        # As rospy's (genpy's) Duration: by an int, seconds and nanoseconds are divided
+        # apart (Duration(3) // 2 is 1 s); by a float, the seconds; by a Duration, a count.
         if isinstance(other, Duration):
-            return self.to_nsec() // other.to_nsec()
-        if isinstance(other, Integral):
-            # int // Integral is an Integral; typeshed's numbers module only says it is real.
-            return type(self)(0, self.to_nsec() // other)  # type: ignore[arg-type]
+            return int(self.to_sec() // other.to_sec())
+        if isinstance(other, Integral) and not isinstance(other, bool):
+            divisor = int(other)
+            return type(self)(self.secs // divisor, self.nsecs // divisor)
+        if isinstance(other, Real):
+            return type(self).from_sec(self.to_sec() // float(other))
         return NotImplemented
+
+
+def _same_kind(value: object, other: object) -> bool:
+    """Whether two values are both times or both durations (of any rospy flavour).
+
+    A message's ``header.stamp`` is this module's :class:`Time`, ``rospy.Time`` a subclass of
+    it; they compare and hash as equals, as in rospy.
+    """
+    return isinstance(other, _TimeValue) and isinstance(other, Time) == isinstance(value, Time)
 
 
 def _duration_type(time: Time) -> Type[Duration]:

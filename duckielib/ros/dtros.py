@@ -4,20 +4,21 @@ On a Duckiebot, nodes derive from ``duckietown.dtros.DTROS``; after
 :func:`duckielib.ros.install_modules` the same import gives this class, so a node written
 for the robot runs unchanged in a notebook. It keeps the parts of Duckietown's class a course
 node uses: ``init_node`` with the node's name, ``node_name``, ``log()`` (which prefixes the
-node's name), the ``~switch`` service that turns the node on and off, ``is_shutdown`` and an
-``on_shutdown()`` method called when the node stops.
+node's name), the ``~switch`` service that turns the node on and off (calling
+``on_switch_on()``/``on_switch_off()``), ``is_shutdown``, an ``on_shutdown()`` method called
+when the node stops, and parameters declared with :class:`DTParam`.
 """
 
 from __future__ import annotations
 
 import enum
 import os
-from typing import Any
+from typing import Any, Callable, List, Optional
 
 from duckielib.messages import get_service_class
 from duckielib.ros import rospy
 
-__all__ = ["DTROS", "NodeHealth", "NodeType", "TopicType"]
+__all__ = ["DTROS", "DTParam", "NodeHealth", "NodeType", "ParamType", "TopicDirection", "TopicType"]
 
 SetBool = get_service_class("std_srvs/SetBool")
 
@@ -38,11 +39,39 @@ class NodeType(enum.Enum):
     INFRASTRUCTURE = 10
     COMMUNICATION = 11
     DIAGNOSTICS = 12
+    CALIBRATION = 13
     DEBUG = 20
 
 
 #: Duckietown tags topics with the same kinds as nodes (``dt_topic_type=TopicType.CONTROL``).
 TopicType = NodeType
+
+
+class TopicDirection(enum.Enum):
+    """Whether a topic comes into a node or goes out of it."""
+
+    INBOUND = 0
+    OUTBOUND = 1
+
+
+class ParamType(enum.Enum):
+    """The type of a :class:`DTParam`'s value."""
+
+    UNKNOWN = 0
+    STRING = 1
+    INT = 2
+    FLOAT = 3
+    BOOL = 4
+    LIST = 5
+    DICT = 6
+
+
+_CONVERT = {ParamType.STRING: str, ParamType.INT: int, ParamType.FLOAT: float, ParamType.BOOL: bool}
+
+
+def _as_type(param_type: ParamType, value: Any) -> Any:
+    convert = _CONVERT.get(param_type)
+    return value if value is None or convert is None else convert(value)
 
 
 class NodeHealth(enum.Enum):
@@ -74,13 +103,22 @@ class DTROS:
     Args:
         node_name: the node's name (a base name such as ``"odometry_node"``).
         node_type: a :class:`NodeType`.
+        pkg_name: the node's package, accepted for compatibility.
+        help: what the node does, in a sentence (for diagnostics).
         dt_ghost: accepted for compatibility; diagnostics skip ghost nodes.
 
     Raises:
         ValueError: if ``node_type`` is not a :class:`NodeType`.
     """
 
-    def __init__(self, node_name: str, node_type: NodeType, dt_ghost: bool = False) -> None:
+    def __init__(
+        self,
+        node_name: str,
+        node_type: NodeType,
+        pkg_name: Optional[str] = None,
+        help: Optional[str] = None,
+        dt_ghost: bool = False,
+    ) -> None:
         if not isinstance(node_type, NodeType):
             raise ValueError(
                 "DTROS 'node_type' parameter must be of type 'duckietown.NodeType', "
@@ -90,6 +128,9 @@ class DTROS:
         rospy.init_node(node_name, log_level=rospy.DEBUG if debug else rospy.INFO)
         self.node_name = rospy.get_name()
         self.node_type = node_type
+        self.package_name = pkg_name
+        self.node_help = help
+        self.parameters: List[DTParam] = []
         self.is_shutdown = False
         self._is_ghost = dt_ghost
         self._health = NodeHealth.STARTING
@@ -157,8 +198,15 @@ class DTROS:
         message = (
             f"Node switched from [{'on' if old else 'off'}] to [{'on' if self._switch else 'off'}]"
         )
+        (self.on_switch_on if self._switch else self.on_switch_off)()
         self.log(message)
         return SetBool._response_class(success=True, message=message)
+
+    def on_switch_on(self) -> None:
+        """Called when the node is switched on through ``~switch``; override it if needed."""
+
+    def on_switch_off(self) -> None:
+        """Called when the node is switched off through ``~switch``; override it if needed."""
 
     def _on_shutdown(self) -> None:
         self.log("Received shutdown request.")
@@ -167,3 +215,115 @@ class DTROS:
 
     def on_shutdown(self) -> None:
         """Called once when the node shuts down; override it to stop motors, close files..."""
+
+
+class DTParam:
+    """A parameter of a Duckietown node: read once, kept with its type, default and limits.
+
+    Create it after the node's ``DTROS.__init__``, usually as ``self.gain = DTParam("~gain",
+    default=1.0, param_type=ParamType.FLOAT)``, and read ``self.gain.value``. A parameter that
+    is not set yet is set to the default.
+
+    Args:
+        name: the parameter's name (``~gain`` is private to the node).
+        default: the value when the parameter is not set.
+        help: what the parameter means.
+        param_type: a :class:`ParamType`; values are converted to it.
+        min_value: the smallest value allowed (int and float parameters).
+        max_value: the largest value allowed (int and float parameters).
+
+    Raises:
+        ValueError: for a wrong ``param_type``, limits on a type without order, or a default
+            outside the limits.
+        KeyError: if the parameter is not set and there is no default.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        default: Any = None,
+        help: Optional[str] = None,
+        param_type: ParamType = ParamType.UNKNOWN,
+        min_value: Any = None,
+        max_value: Any = None,
+    ) -> None:
+        if not isinstance(param_type, ParamType):
+            raise ValueError(
+                f"DTParam's 'param_type' must be a duckietown ParamType, not {type(param_type)}."
+            )
+        ordered = param_type in (ParamType.INT, ParamType.FLOAT)
+        if (min_value is not None or max_value is not None) and not ordered:
+            raise ValueError(f"DTParam {name}: limits need an INT or FLOAT parameter.")
+        self._name = rospy.resolve_name(name)
+        self._help = help
+        self._type = param_type
+        self._min_value = _as_type(param_type, min_value)
+        self._max_value = _as_type(param_type, max_value)
+        self._default = _as_type(param_type, default)
+        if self._default is not None:
+            if self._min_value is not None and self._default < self._min_value:
+                raise ValueError(f"DTParam {name}: the default is below min_value.")
+            if self._max_value is not None and self._default > self._max_value:
+                raise ValueError(f"DTParam {name}: the default is above max_value.")
+        self._listeners: List[Callable[[], Any]] = []
+        if rospy.has_param(self._name):
+            self._value = _as_type(param_type, rospy.get_param(self._name))
+        elif default is None:
+            raise KeyError(f"Parameter `{self._name}` not found.")
+        else:
+            self._value = self._default
+            rospy.set_param(self._name, self._default)
+
+    @property
+    def name(self) -> str:
+        """The parameter's global name."""
+        return self._name
+
+    @property
+    def help(self) -> Optional[str]:
+        """What the parameter means."""
+        return self._help
+
+    @property
+    def value(self) -> Any:
+        """The parameter's value."""
+        return self._value
+
+    @property
+    def default(self) -> Any:
+        """The value used when it was not set."""
+        return self._default
+
+    @property
+    def type(self) -> ParamType:
+        """The parameter's type."""
+        return self._type
+
+    @property
+    def min_value(self) -> Any:
+        """The smallest value allowed, or None."""
+        return self._min_value
+
+    @property
+    def max_value(self) -> Any:
+        """The largest value allowed, or None."""
+        return self._max_value
+
+    def set_value(self, value: Any) -> None:
+        """Change the value here (not on the parameter server) and tell the listeners."""
+        self._value = value
+        for listener in list(self._listeners):
+            listener()
+
+    def force_update(self) -> None:
+        """Read the value from the parameter server again."""
+        self.set_value(_as_type(self._type, rospy.get_param(self._name, self._default)))
+
+    def register_update_callback(self, callback: Callable[[], Any]) -> None:
+        """Call ``callback()`` whenever the value changes."""
+        self._listeners.append(callback)
+
+    def unregister_update_callback(self, callback: Callable[[], Any]) -> None:
+        """Stop calling ``callback``."""
+        if callback in self._listeners:
+            self._listeners.remove(callback)

@@ -346,19 +346,20 @@ class Graph(ParameterServer):
             *args: positional arguments for ``target``.
             name: overrides the name given to ``init_node`` (roslaunch's ``name``).
             namespace: the namespace the node runs in, for example ``"/duckiebot"``.
-            remap: topic and service remappings, ``{"from": "to"}``, resolved in the namespace.
+            remap: topic and service remappings, ``{"from": "to"}``, resolved in the namespace
+                (a private ``"~from"`` in the node's own).
             params: private parameters (``~name``), set before the node starts.
             **kwargs: keyword arguments for ``target``.
         """
         namespace = names.normalize_namespace(namespace)
-        remappings = {
-            names.resolve(source, namespace): names.resolve(destination, namespace)
-            for source, destination in (remap or {}).items()
-        }
+        for source, destination in (remap or {}).items():
+            for each in (source, destination):
+                if not names.is_legal_name(each):
+                    raise ValueError(f"{each!r} is not a legal ROS name to remap.")
         launch = {
             "name": name,
             "namespace": namespace,
-            "remap": remappings,
+            "remap": dict(remap or {}),
             "params": dict(params or {}),
         }
         actor = _Actor(self, target, args, kwargs, launch, self.threads)

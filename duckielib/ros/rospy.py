@@ -74,8 +74,10 @@ __all__ = [
     "signal_shutdown",
     "on_shutdown",
     "spin",
+    "myargv",
     # topics and services
     "Publisher",
+    "SubscribeListener",
     "Subscriber",
     "Service",
     "ServiceProxy",
@@ -212,7 +214,7 @@ def sleep(duration: Union[float, rostime.Duration]) -> None:
     """
     node = current_node("rospy.sleep()")
     if node.is_shutdown:
-        raise ROSInterruptException("ROS shutdown request")
+        return  # as rospy on a robot's clock: a sleep after shutdown (in a hook) just returns
     span = _to_ns(duration)
     if span <= 0:
         return
@@ -366,6 +368,8 @@ def init_node(
 
     A node launched with a name or namespace (``Graph.launch``) takes those instead. Outside
     launched nodes (a notebook), the namespace comes from ``ROS_NAMESPACE``, as in ROS.
+    ``argv`` may hold roslaunch-style arguments: remappings (``chatter:=/news``,
+    ``~cmd:=/x``), ``__name:=``, ``__ns:=`` and private parameters (``_rate:=10``).
 
     Raises:
         ValueError: if ``name`` is not a legal base name.
@@ -392,12 +396,49 @@ def init_node(
     launch = actor.launch if actor is not None else {}
     namespace = launch.get("namespace") or os.environ.get("ROS_NAMESPACE", "/")
     base = launch.get("name") or name
+    remap = dict(launch.get("remap") or {})
+    params = dict(launch.get("params") or {})
+    for arg in argv or []:  # roslaunch-style arguments: name:=value
+        key, sep, value = arg.partition(":=")
+        if not sep:
+            continue
+        if key == "__name":
+            base = value
+        elif key == "__ns":
+            namespace = value
+        elif key.startswith("_") and not key.startswith("__"):
+            params[key[1:]] = _argument_value(value)
+        elif not key.startswith("__"):
+            remap[key] = value
     if anonymous:
         base += graph.anonymous_suffix()
-    node = Node(graph, base, namespace, launch.get("remap"), log_level or INFO, arguments)
-    for key, value in launch.get("params", {}).items():
+    namespace = names.normalize_namespace(namespace)
+    full_name = names.canonical(namespace + base)
+    remappings = {
+        names.resolve(source, namespace, full_name): names.resolve(target, namespace, full_name)
+        for source, target in remap.items()
+    }
+    node = Node(graph, base, namespace, remappings, log_level or INFO, arguments)
+    for key, value in params.items():
         graph.set_param(node.resolve_param("~" + key.lstrip("~")), value)
     graph.add_node(node)
+
+
+def _argument_value(text: str) -> Any:
+    """A private parameter given as ``_name:=value``: a bool, int or float if it reads as one."""
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def myargv(argv: Optional[List[str]] = None) -> List[str]:
+    """The command line without ROS's remapping arguments (those with ``:=``)."""
+    return [arg for arg in (sys.argv if argv is None else argv) if ":=" not in arg]
 
 
 def get_name() -> str:
@@ -445,6 +486,24 @@ def spin() -> None:
 
 
 # -- topics -------------------------------------------------------------------------------------
+class SubscribeListener:
+    """Told when subscribers come and go: give one to ``Publisher(subscriber_listener=...)``.
+
+    Override the methods you need; the defaults do nothing.
+    """
+
+    def peer_subscribe(
+        self,
+        topic_name: str,
+        topic_publish: Callable[[Any], None],
+        peer_publish: Callable[[Any], None],
+    ) -> None:
+        """A subscriber connected: ``topic_publish`` sends to all, ``peer_publish`` to it only."""
+
+    def peer_unsubscribe(self, topic_name: str, num_peers: int) -> None:
+        """A subscriber left; ``num_peers`` are still connected."""
+
+
 def _check_data_class(data_class: Any, what: str) -> None:
     md5sum = getattr(data_class, "_md5sum", None) if isinstance(data_class, type) else None
     if not md5sum:
@@ -514,6 +573,7 @@ class Publisher:
         self.md5sum = data_class._md5sum
         self.latch = latch
         self.queue_size = queue_size
+        self.subscriber_listener: Optional[SubscribeListener] = subscriber_listener
         self._seq = 0
         self._record: Optional[TopicRecord] = self._node.topic(self.name, data_class, "publish on")
         self._record.publishers.append(self)
@@ -539,6 +599,8 @@ class Publisher:
             TypeError: if the message is of another type than the topic's.
         """
         if self._record is None:
+            if self._node.is_shutdown:
+                return  # as rospy: a node that has shut down publishes nothing, quietly
             raise ROSException(f"publish() to an unregistered() handle (topic {self.name}).")
         try:
             message: Any
@@ -619,6 +681,19 @@ class Subscriber:
         self._node.subscribers.append(self)
         for data in self._record.latched.values():
             self._enqueue(data)
+        for publisher in list(self._record.publishers):
+            listener = publisher.subscriber_listener
+            if listener is not None:
+                listener.peer_subscribe(self.name, publisher.publish, self._peer_publish(publisher))
+
+    def _peer_publish(self, publisher: Publisher) -> Callable[[Any], None]:
+        """Publish from ``publisher`` to this subscriber only (a listener's ``peer_publish``)."""
+
+        def peer_publish(message: Any) -> None:
+            if self._record is not None:
+                self._enqueue(_to_message(publisher.data_class, (message,), {}).to_bytes())
+
+        return peer_publish
 
     @property
     def node(self) -> Node:
@@ -672,6 +747,10 @@ class Subscriber:
         if record is None:
             return
         record.subscribers.remove(self)
+        for publisher in list(record.publishers):
+            listener = publisher.subscriber_listener
+            if listener is not None:
+                listener.peer_unsubscribe(self.name, len(record.subscribers))
         if self in self._node.subscribers:
             self._node.subscribers.remove(self)
         self._queue.clear()
@@ -924,8 +1003,37 @@ def get_param_cached(param_name: str, default: Any = _UNSET) -> Any:
 
 
 def set_param(param_name: str, param_value: Any) -> None:
-    """Set a parameter (a dict sets a whole namespace)."""
+    """Set a parameter (a dict sets a whole namespace).
+
+    Raises:
+        ROSException: if the value is of a type ROS's parameter server cannot store (it
+            stores bool, int, float, str, lists and dicts of them).
+    """
+    problem = _unstorable(param_value)
+    if problem:
+        raise ROSException(
+            f"rospy.set_param({param_name!r}, ...): the parameter server cannot store {problem}; "
+            "convert it to a plain Python value first (float(x), int(x), list(a) or a.tolist())."
+        )
     current_graph().set_param(_param_name(param_name), param_value)
+
+
+#: The types the parameter server stores (XML-RPC's), by exact type, as a robot's master does.
+_STORABLE = (bool, int, float, str, bytes)
+
+
+def _unstorable(value: Any) -> Optional[str]:
+    """What in ``value`` a robot's parameter server would refuse, or None."""
+    if type(value) is int and not -(2**31) <= value < 2**31:
+        return f"the integer {value} (it must fit in 32 bits)"
+    if type(value) in _STORABLE:
+        return None
+    if type(value) is dict and not all(isinstance(key, str) for key in value):
+        return "a dict with keys that are not strings"
+    if type(value) in (list, tuple, dict):
+        items = value.values() if type(value) is dict else value
+        return next(filter(None, (_unstorable(item) for item in items)), None)
+    return "None" if value is None else f"a {type(value).__module__}.{type(value).__name__}"
 
 
 def has_param(param_name: str) -> bool:

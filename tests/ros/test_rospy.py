@@ -15,6 +15,7 @@ from duckielib.messages import (
     WheelsCmdStamped,
 )
 from duckielib.ros import Graph, NodeCrashed, rospy
+from duckielib.ros.context import node_context
 
 
 @pytest.fixture(params=["greenlets", "threads"])
@@ -528,8 +529,6 @@ def test_shutdown_hooks_run_and_close_the_node(graph):
 
 
 def test_graph_shutdown_delivers_what_launched_nodes_say_on_the_way_out(graph):
-    from duckielib.ros.context import node_context
-
     heard = []
     with node_context(graph.host_node("wheels_driver")):  # a driver: callbacks only
         rospy.Subscriber(
@@ -547,13 +546,29 @@ def test_graph_shutdown_delivers_what_launched_nodes_say_on_the_way_out(graph):
     assert all(actor.finished for actor in graph._actors)
 
 
-def test_publish_after_shutdown_is_refused(graph):
+def test_after_shutdown_a_publish_is_dropped_and_a_sleep_returns(graph):
+    # As Debian's rospy on a robot's clock: code in a shutdown hook or after the loop goes on.
+    heard = []
+    listener = graph.host_node("listener")
+    with node_context(listener):
+        rospy.Subscriber("chatter", String, heard.append)
     rospy.init_node("short_lived")
     pub = rospy.Publisher("chatter", String, queue_size=1)
     rospy.signal_shutdown("done")
     assert rospy.is_shutdown()
+    assert pub.publish("too late") is None
+    rospy.sleep(1.0)
+    graph.run(0.0)
+    assert heard == []
+    assert graph.time == 0.0
+
+
+def test_publish_to_an_unregistered_publisher_is_refused(graph):
+    rospy.init_node("tidy")
+    pub = rospy.Publisher("chatter", String, queue_size=1)
+    pub.unregister()
     with pytest.raises(rospy.ROSException, match="unregistered"):
-        pub.publish("too late")
+        pub.publish("after unregister")
 
 
 def test_a_node_shut_down_while_it_sleeps_or_spins_wakes_at_once(graph):

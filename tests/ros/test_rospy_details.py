@@ -1,0 +1,157 @@
+"""Details of rospy that node code relies on, as Debian's rospy behaves on a robot."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+from duckielib.messages import Header, String
+from duckielib.ros import Graph, rospy
+from duckielib.ros.context import node_context
+from duckielib.ros.dtros import DTROS, DTParam, NodeType, ParamType
+
+
+@pytest.fixture
+def graph():
+    graph = Graph(stdout=io.StringIO(), stderr=io.StringIO())
+    yield graph
+    graph.shutdown()
+
+
+def test_a_stamp_compares_with_rospy_time():
+    stamp = Header().stamp  # what a message carries
+    assert stamp == rospy.Time(0)
+    assert stamp < rospy.Time(1)
+    assert rospy.Time(2, 5) > Header(stamp=rospy.Time(2)).stamp
+    assert hash(stamp) == hash(rospy.Time(0))
+    assert {stamp, rospy.Time(0)} == {stamp}
+    assert rospy.Time(1) != rospy.Duration(1), "a time is not a duration"
+    with pytest.raises(TypeError):
+        _ = rospy.Time(1) < rospy.Duration(2)
+
+
+def test_durations_divide_as_in_rospy():
+    assert rospy.Duration(3) // 2 == rospy.Duration(1)  # seconds and nanoseconds apart
+    assert rospy.Duration(3, 500_000_000) // 2 == rospy.Duration(1, 250_000_000)
+    assert rospy.Duration(3.5) // 2.0 == rospy.Duration(1)
+    assert rospy.Duration(7) // rospy.Duration(2) == 3
+    assert rospy.Duration(3) / 2 == rospy.Duration(1.5)
+
+
+def test_the_parameter_server_refuses_what_a_robots_refuses(graph):
+    rospy.init_node("tuner")
+    rospy.set_param("~gain", 1.5)
+    rospy.set_param("~gains", {"left": [1, 2.5, "x", True]})
+    assert rospy.get_param("~gains") == {"left": [1, 2.5, "x", True]}
+    with pytest.raises(rospy.ROSException, match=r"cannot store a numpy\.float64.*float\(x\)"):
+        rospy.set_param("~gain", np.float64(1.5))
+    with pytest.raises(rospy.ROSException, match=r"numpy\.ndarray"):
+        rospy.set_param("~path", np.zeros(3))
+    with pytest.raises(rospy.ROSException, match="cannot store None"):
+        rospy.set_param("~nothing", None)
+    with pytest.raises(rospy.ROSException, match="32 bits"):
+        rospy.set_param("~ticks", 2**40)
+    assert rospy.get_param("~gain") == 1.5, "a refused value changes nothing"
+
+
+def test_myargv_drops_remapping_arguments():
+    argv = ["node.py", "--speed", "0.2", "chatter:=/news", "__name:=talker", "_rate:=5"]
+    assert rospy.myargv(argv) == ["node.py", "--speed", "0.2"]
+
+
+def test_init_node_reads_remappings_names_and_private_parameters_from_argv(graph):
+    heard = []
+
+    def talker():
+        rospy.init_node("talker", argv=["talker.py", "~out:=/news", "__ns:=/duckiebot", "_hz:=4"])
+        hz = rospy.get_param("~hz")
+        pub = rospy.Publisher("~out", String, queue_size=10)
+        rate = rospy.Rate(hz)
+        for _ in range(4):
+            pub.publish(String(data=rospy.get_name()))
+            rate.sleep()
+
+    def listener():
+        rospy.init_node("listener")
+        rospy.Subscriber("/news", String, lambda msg: heard.append((rospy.get_time(), msg.data)))
+        rospy.spin()
+
+    graph.launch(listener)
+    graph.launch(talker)
+    graph.run(2.0)
+    assert heard == [(t, "/duckiebot/talker") for t in (0.0, 0.25, 0.5, 0.75)]
+    assert graph.get_param("/duckiebot/talker/hz") == 4
+
+
+def test_a_private_name_can_be_remapped_at_launch(graph):
+    heard = []
+
+    def talker():
+        rospy.init_node("talker")
+        rospy.Publisher("~chatter", String, queue_size=1, latch=True).publish(String(data="hi"))
+        rospy.spin()
+
+    listener = graph.host_node("listener")
+    with node_context(listener):
+        rospy.Subscriber("/x", String, heard.append)
+    graph.launch(talker, remap={"~chatter": "/x"})
+    graph.run(0.5)
+    assert [msg.data for msg in heard] == ["hi"]
+
+
+def test_a_subscribe_listener_hears_subscribers_come_and_go(graph):
+    events = []
+
+    class Greeter(rospy.SubscribeListener):
+        def peer_subscribe(self, topic_name, topic_publish, peer_publish):
+            events.append(("subscribe", topic_name))
+            peer_publish(String(data="welcome"))  # to the newcomer only
+
+        def peer_unsubscribe(self, topic_name, num_peers):
+            events.append(("unsubscribe", topic_name, num_peers))
+
+    rospy.init_node("greeter")
+    rospy.Publisher("chatter", String, queue_size=10, subscriber_listener=Greeter())
+    first, second = [], []
+    sub = rospy.Subscriber("chatter", String, first.append)
+    graph.run(0.0)
+    rospy.Subscriber("chatter", String, second.append)
+    graph.run(0.0)
+    sub.unregister()
+    assert [msg.data for msg in first] == ["welcome"]
+    assert [msg.data for msg in second] == ["welcome"]
+    assert events == [
+        ("subscribe", "/chatter"),
+        ("subscribe", "/chatter"),
+        ("unsubscribe", "/chatter", 1),
+    ]
+
+
+def test_a_duckietown_node_with_help_parameters_and_a_switch(graph):
+    class Driver(DTROS):
+        def __init__(self):
+            super().__init__(node_name="driver", node_type=NodeType.CONTROL, help="Drives.")
+            self.gain = DTParam("~gain", default=2, param_type=ParamType.FLOAT, min_value=0)
+            self.events = []
+
+        def on_switch_off(self):
+            self.events.append("off")
+
+        def on_switch_on(self):
+            self.events.append("on")
+
+    graph.set_param("/driver/gain", 3)
+    node = Driver()
+    assert node.node_help == "Drives."
+    assert node.gain.value == 3.0
+    assert isinstance(node.gain.value, float)
+    switch = rospy.ServiceProxy("/driver/switch", node.srv_switch.service_class)
+    assert switch(False).success
+    assert switch(True).success
+    assert node.events == ["off", "on"]
+    with pytest.raises(KeyError, match="not found"):
+        DTParam("~missing")
+    with pytest.raises(ValueError, match="below min_value"):
+        DTParam("~speed", default=-1.0, param_type=ParamType.FLOAT, min_value=0.0)
