@@ -13,11 +13,13 @@ LAB_ARGS ?=
 # The folder JupyterLab shows: the repository (its course/ opens first).
 LAB_DIR ?= $(CURDIR)
 
-# Debian's ROS 1 (rospy, roscore, rosbag, genpy, message packages), bubblewrap, the sandbox
+# Debian's ROS 1 (rospy, roscore, rosbag, genpy, the message packages whose md5 sums the tests
+# compare with the course's), bubblewrap, the sandbox
 # the autograder runs student code in, Chromium, the browser the JupyterLab tests drive, and
 # ffmpeg, which writes animations as MP4.
 ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-genpy \
-	python3-genmsg python3-std-msgs python3-sensor-msgs bubblewrap python3-venv chromium ffmpeg
+	python3-genmsg python3-std-msgs python3-sensor-msgs python3-geometry-msgs python3-nav-msgs \
+	python3-std-srvs python3-tf2-msgs bubblewrap python3-venv chromium ffmpeg
 
 .PHONY: help run test lab robot ros lint format bench lock clean
 

@@ -8,7 +8,16 @@ from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 from duckielib import messages
 from duckielib.rostime import Duration, Time
 
-DUCKIETOWN = [name for name in messages.message_types() if name.startswith("duckietown_msgs/")]
+#: Types with quoted string constants (FSMState's LANE_FOLLOWING="LANE_FOLLOWING"): ROS keeps
+#: the quotes in the text it hashes, rosbags drops them, so its md5 sum of these is not ROS's.
+QUOTED_CONSTANTS = [
+    name
+    for name in messages.message_types()
+    if any(
+        constant.type == "string" and constant.value_text[:1] in ("'", '"')
+        for constant in messages.REGISTRY.message(name).constants
+    )
+]
 
 
 def _rosbags_name(name: str) -> str:
@@ -19,13 +28,29 @@ def _rosbags_name(name: str) -> str:
 @pytest.fixture(scope="module")
 def typestore():
     store = get_typestore(Stores.ROS1_NOETIC)
-    for name in DUCKIETOWN:
+    # The types rosbags does not know (duckietown_msgs, tf2_msgs), from our definitions.
+    for name in messages.message_types():
+        if _rosbags_name(name) in store.fielddefs:
+            continue
         definition = messages.get_message_class(name)._full_text.split("=" * 80)[0]
         store.register(get_types_from_msg(definition, _rosbags_name(name)))
     return store
 
 
-@pytest.mark.parametrize("name", messages.message_types())
+@pytest.mark.parametrize(
+    "name",
+    [
+        pytest.param(
+            name,
+            marks=pytest.mark.xfail(
+                name in QUOTED_CONSTANTS,
+                reason="rosbags drops the quotes of string constants",
+                strict=True,
+            ),
+        )
+        for name in messages.message_types()
+    ],
+)
 def test_rosbags_computes_the_same_md5(typestore, name):
     _, md5 = typestore.generate_msgdef(_rosbags_name(name), ros_version=1)
     assert md5 == messages.get_message_class(name)._md5sum

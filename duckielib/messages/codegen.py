@@ -1,8 +1,8 @@
 """Generated readers and writers of the ROS 1 wire format, one pair per message type.
 
 genpy writes a ``serialize`` and a ``deserialize`` method for every message type, packing runs
-of fixed-size fields with a single ``struct`` call; this module does the same at import time,
-from the codecs of :mod:`.message`. For ``WheelEncoderStamped`` the writer is three lines::
+of fixed-size fields with a single ``struct`` call; this module does the same when a class is
+made, from the codecs of :mod:`.message`. For ``WheelEncoderStamped`` the writer is three lines::
 
     out += _s0.pack(self.header.seq, self.header.stamp.secs, self.header.stamp.nsecs)
     _text = self.header.frame_id.encode("utf-8"); out += _U32.pack(len(_text)); out += _text

@@ -1,6 +1,6 @@
 """Message classes that behave like the ones genpy generates for rospy.
 
-A class is made at import time from a parsed ``.msg`` definition (see :mod:`.spec`). Its
+A class is made, on first use, from a parsed ``.msg`` definition (see :mod:`.spec`). Its
 instances have the definition's fields as attributes, are built from keywords or from every
 field in order, start from ROS's defaults (0, 0.0, ``""``, ``False``, ``[]``, ``b""`` for byte
 arrays, an empty nested message, ``Time(0)``), and carry ``_type``, ``_md5sum``,

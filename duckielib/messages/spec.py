@@ -14,10 +14,11 @@ robot checks before it talks to us, and the definition text that bags embed:
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import re
 from dataclasses import dataclass, field
-from typing import Dict, List, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 from duckielib.errors import MessageDefinitionError, UnknownTypeError
 
@@ -246,6 +247,24 @@ def parse_service(text: str, full_name: str) -> ServiceSpec:
     return ServiceSpec(full_name, text, request, response)
 
 
+def _unknown(kind: str, full_name: str, known: Dict[str, Any]) -> UnknownTypeError:
+    """The error for a type name not in ``known``, naming the types it may have meant."""
+    package, _, short_name = full_name.rpartition("/")
+    same_package = {
+        name.rpartition("/")[2]: name for name in known if name.startswith(package + "/")
+    }
+    alike = [name for name in known if name.rpartition("/")[2] == short_name]
+    alike += [same_package[name] for name in difflib.get_close_matches(short_name, same_package)]
+    if alike:
+        hint = "did you mean " + " or ".join(repr(name) for name in dict.fromkeys(alike)) + "?"
+    elif same_package:
+        hint = f"the {package} types are: {', '.join(sorted(same_package))}."
+    else:
+        packages = sorted({name.partition("/")[0] for name in known})
+        hint = f"the packages are: {', '.join(packages)}."
+    return UnknownTypeError(f"There is no {kind} type {full_name!r}; {hint}")
+
+
 @dataclass
 class SpecRegistry:
     """Parsed message and service definitions, with md5 sums and full texts computed on demand."""
@@ -273,10 +292,18 @@ class SpecRegistry:
         try:
             return self.messages[full_name]
         except KeyError:
-            raise UnknownTypeError(
-                f"There is no message type {full_name!r}; known types are: "
-                f"{', '.join(sorted(self.messages))}."
-            ) from None
+            raise _unknown("message", full_name, self.messages) from None
+
+    def service(self, full_name: str) -> ServiceSpec:
+        """The definition of a service type.
+
+        Raises:
+            UnknownTypeError: if the type is not registered.
+        """
+        try:
+            return self.services[full_name]
+        except KeyError:
+            raise _unknown("service", full_name, self.services) from None
 
     def md5_text(self, full_name: str) -> str:
         """The text whose md5 is the message's md5 sum (see the module docstring)."""

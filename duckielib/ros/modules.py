@@ -9,6 +9,10 @@ a real rospy (Debian's, a robot's) always wins.
 
 :func:`install_modules` serves the names at once, and with ``replace_real=True`` even where a
 real ROS is installed (the mission runner does this for the nodes it runs in-process).
+
+A package of one's own works as on a robot too: its ``msg/*.msg`` and ``srv/*.srv`` files, in a
+package folder on the Python path or in the current folder, import as ``<package>.msg`` and
+``<package>.srv`` (see :class:`PackageDefinitions`).
 """
 
 from __future__ import annotations
@@ -18,12 +22,14 @@ import importlib.abc
 import importlib.machinery
 import sys
 import types
+from pathlib import Path
 from typing import Dict, Iterator, List, Optional, Sequence
 
 from duckielib import messages
 from duckielib.ros import dtros, rospy
 
 __all__ = [
+    "PackageDefinitions",
     "RobotImports",
     "install_modules",
     "modules_installed",
@@ -31,7 +37,15 @@ __all__ = [
     "uninstall_modules",
 ]
 
-_MESSAGE_PACKAGES = ("std_msgs", "sensor_msgs", "duckietown_msgs", "std_srvs")
+
+def _message_packages() -> List[str]:
+    """The packages with definitions in :mod:`duckielib.messages`: std_msgs, geometry_msgs..."""
+    names = [*messages.REGISTRY.messages, *messages.REGISTRY.services]
+    return sorted({name.partition("/")[0] for name in names})
+
+
+#: The message packages served: every package of the course's definitions.
+_MESSAGE_PACKAGES = tuple(_message_packages())
 
 
 def _aliases() -> Dict[str, Dict[str, types.ModuleType]]:
@@ -60,8 +74,9 @@ def _is_ours(module: object) -> bool:
 def install_modules(replace_real: bool = False) -> List[str]:
     """Serve robot code's imports from the in-process graph and the course's messages.
 
-    After it, ``import rospy``, ``std_msgs.msg``, ``sensor_msgs.msg``, ``duckietown_msgs.msg``
-    and ``.srv``, ``std_srvs.srv`` and ``duckietown.dtros`` resolve to duckielib.
+    After it, ``import rospy``, ``duckietown.dtros`` and the message packages (``std_msgs.msg``,
+    ``geometry_msgs.msg``, ``duckietown_msgs.msg`` and ``.srv``, ``std_srvs.srv``... every
+    package of :mod:`duckielib.messages`) resolve to duckielib.
 
     Args:
         replace_real: also replace a real ROS installation found on the Python path.
@@ -137,7 +152,18 @@ class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     ) -> Optional[importlib.machinery.ModuleSpec]:
         """A spec for a name the course serves (``rospy``, ``std_msgs.msg``...), else None."""
         top = fullname.partition(".")[0]
-        if top not in _SERVED or fullname not in _SERVED[top]:
+        if top not in _SERVED:
+            # Last of all: a package of one's own in the current folder (its msg/ and srv/
+            # folders are then served by PackageDefinitions).
+            if "." in fullname or _real_rospy_in_use():
+                return None
+            folder = _cwd() / fullname
+            if not _has_definitions(folder):
+                return None
+            spec = importlib.machinery.ModuleSpec(fullname, self, is_package=True)
+            spec.submodule_search_locations = [str(folder)]
+            return spec
+        if fullname not in _SERVED[top]:
             return None
         return importlib.machinery.ModuleSpec(fullname, self)
 
@@ -150,10 +176,85 @@ class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def exec_module(self, module: types.ModuleType) -> None:
         """Put duckielib's modules for the name's package into ``sys.modules``."""
         top = module.__name__.partition(".")[0]
+        if top not in _SERVED:
+            return  # a package folder of one's own: its __path__ is all it needs
         for name, served in _aliases()[top].items():
             # Its package's other modules too, unless already imported (by a real ROS).
             if name == module.__name__ or name not in sys.modules:
                 sys.modules[name] = served
+
+
+class PackageDefinitions(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+    """Serves the ``msg/`` and ``srv/`` folders of a package of one's own as its modules.
+
+    When catkin builds a robot's workspace, it turns ``my_pkg/msg/Foo.msg`` into the module
+    ``my_pkg.msg``; this does the same on import, for a package folder on the Python path or in
+    the current folder, so ``from my_pkg.msg import Foo`` just works. The fields of the types
+    may use those of the package itself and of every package the course defines.
+
+    It stands before Python's own path finder, which would take such a folder for an empty
+    namespace package, and steps aside for a folder with an ``__init__.py`` (a module catkin
+    generated), for the course's own packages, and whenever a real rospy is in use.
+    """
+
+    def find_spec(
+        self, fullname: str, path: Optional[Sequence[str]] = None, target: object = None
+    ) -> Optional[importlib.machinery.ModuleSpec]:
+        """A spec for ``<package>.msg`` or ``.srv`` of a folder with definitions, else None."""
+        package, _, kind = fullname.partition(".")
+        if kind not in ("msg", "srv") or package in _MESSAGE_PACKAGES or path is None:
+            return None
+        if _real_rospy_in_use():
+            return None
+        for entry in path:
+            folder = Path(entry)
+            if _has_definitions(folder, kind):
+                return importlib.machinery.ModuleSpec(fullname, self, origin=str(folder / kind))
+        return None
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> types.ModuleType:
+        """A placeholder module, replaced by :meth:`exec_module`."""
+        return types.ModuleType(spec.name)
+
+    def exec_module(self, module: types.ModuleType) -> None:
+        """Read the package's definitions and put its ``msg`` or ``srv`` module in place.
+
+        Raises:
+            MessageDefinitionError: if a definition is invalid or names an unknown type.
+        """
+        package, _, kind = module.__name__.partition(".")
+        origin = module.__spec__.origin if module.__spec__ else None
+        folder = Path(str(origin)).parent
+        sys.modules[module.__name__] = getattr(messages.add_package(package, folder), kind)
+
+
+def _has_definitions(folder: Path, kind: Optional[str] = None) -> bool:
+    """Whether ``folder`` holds ``msg/*.msg`` or ``srv/*.srv`` files not built into a module."""
+    for each in [kind] if kind else ["msg", "srv"]:
+        found = folder / str(each)
+        try:
+            if (
+                found.is_dir()
+                and not (found / "__init__.py").exists()
+                and not (folder / f"{each}.py").exists()
+                and any(found.glob(f"*.{each}"))
+            ):
+                return True
+        except OSError:  # unreadable, or not a folder name at all
+            continue
+    return False
+
+
+def _cwd() -> Path:
+    try:
+        return Path.cwd()
+    except OSError:  # the current folder was deleted
+        return Path("/nonexistent")
+
+
+def _real_rospy_in_use() -> bool:
+    found = sys.modules.get("rospy")
+    return found is not None and not _is_ours(found)
 
 
 #: The names the finder serves: top-level name -> its module names.
@@ -163,6 +264,14 @@ _SERVED: Dict[str, List[str]] = {top: list(modules) for top, modules in _aliases
 def _register_finder() -> None:
     if not any(isinstance(finder, RobotImports) for finder in sys.meta_path):
         sys.meta_path.append(RobotImports())
+    if not any(isinstance(finder, PackageDefinitions) for finder in sys.meta_path):
+        # Just before Python's path finder, which would make the folder a namespace package.
+        finders = sys.meta_path
+        where = next(
+            (i for i, f in enumerate(finders) if f is importlib.machinery.PathFinder),
+            len(finders),
+        )
+        finders.insert(where, PackageDefinitions())
 
 
 _register_finder()

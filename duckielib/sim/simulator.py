@@ -433,5 +433,5 @@ class Simulator:
         camera = self.camera
         index = math.floor(self.time * camera.rate_hz + 1e-9)
         if self._frame is None or self._frame[0] != index:
-            self._frame = (index, camera.encode_jpeg(camera.render(self.pose)))
+            self._frame = (index, camera.jpeg(self.pose))
         return self._frame[1]

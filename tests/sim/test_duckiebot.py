@@ -505,3 +505,36 @@ def test_graph_benchmark_prints_its_headline_last():
     # 60 s: two encoders at 30 Hz, ground truth and the 30 Hz controller's command with the
     # three messages it causes (wheels_cmd, velocity, wheels_cmd_executed), one LED pattern.
     assert abs(int(values["graph_messages"]) - (2 * 1800 + 5 * 1801 + 1)) <= 6
+
+
+@pytest.mark.slow
+def test_camera_benchmark_delivers_every_frame_as_jpeg():
+    values = dict(run_benchmark("camera"))
+    assert list(values)[-1] == "camera_realtime_factor"
+    assert float(values["camera_realtime_factor"]) > 0
+    assert values["camera_simulated_s"] == "20.0"
+    # 30 frames a second for 20 s, each a whole JPEG.
+    assert int(values["camera_frames"]) == 600
+    assert values["camera_jpeg_frames"] == values["camera_frames"]
+    assert 2.0 < float(values["camera_mean_jpeg_kb"]) < 60.0
+
+
+def test_the_camera_renders_the_same_pixels_in_single_precision(bot):
+    camera = bot.sim.camera
+    middle_x, middle_y = camera.world.width / 2, camera.world.height / 2
+    for pose in ((middle_x, middle_y, 0.3), (middle_x - 0.2, middle_y, 2.0), (0.3, 0.3, 0.8)):
+        x, y = camera.pixels_in_world(pose)  # double precision, in metres
+        size = camera.world.tile_size
+        tiles_x, tiles_y = x / size, y / size
+        expected = ((np.floor(tiles_x) + np.floor(tiles_y)) % 2 != 0).astype(np.uint8)
+        half_line = camera.line_width_m / 2
+        border = (np.abs(x - np.round(tiles_x) * size) < half_line) | (
+            np.abs(y - np.round(tiles_y) * size) < half_line
+        )
+        expected[border] = 2
+        got = camera.palette_indices(pose)
+        on_mat = got < 3
+        assert on_mat.mean() > 0.5
+        assert np.array_equal(got[on_mat], expected[on_mat])
+        jpeg = camera.jpeg(pose)
+        assert jpeg[:2] == b"\xff\xd8"

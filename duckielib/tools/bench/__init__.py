@@ -26,6 +26,10 @@ BENCHMARKS: Dict[str, Tuple[str, str]] = {
         "duckielib.tools.bench.graph",
         "real-time factor of the virtual Duckiebot with a controller and a listener node",
     ),
+    "camera": (
+        "duckielib.tools.bench.camera",
+        "real-time factor of the virtual Duckiebot with a node subscribed to its camera",
+    ),
     "sim": (
         "duckielib.tools.bench.sim",
         "real-time factor of the simulator alone (60 s drive, encoders and LEDs on)",
