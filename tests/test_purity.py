@@ -70,6 +70,7 @@ def test_the_folders_say_where_code_runs():
     library = ROOT / "duckielib"
     laptop = sorted(path.name for path in library.iterdir() if path.name in LAPTOP_PACKAGES)
     assert laptop == sorted(LAPTOP_PACKAGES), "a laptop package is missing"
+    assert laptop == ["bags", "lab", "libraries", "plots", "sim", "tools"]
     deployed = {path.parts[1] for path in robot_modules()}
     assert not deployed & set(LAPTOP_PACKAGES)
     # The robot gets the pure core and its packages: the messages, the in-process rospy,

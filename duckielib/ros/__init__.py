@@ -29,7 +29,7 @@ from duckielib.ros import rospy
 from duckielib.ros.graph import Graph, NodeCrashed, default_graph
 from duckielib.ros.introspect import rosmsg, rosnode, rosparam, rosservice, rossrv, rostopic
 from duckielib.ros.log import LogRecord
-from duckielib.ros.modules import install_modules, uninstall_modules
+from duckielib.ros.modules import install_modules, node_script, uninstall_modules
 
 __all__ = [
     "Graph",
@@ -37,6 +37,7 @@ __all__ = [
     "NodeCrashed",
     "default_graph",
     "install_modules",
+    "node_script",
     "rosmsg",
     "rosnode",
     "rosparam",

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from typing import Any, Iterator, List, Optional
+from typing import Any, Callable, Iterator, List, Optional
 
 from duckielib.ros.exceptions import ROSInitException
 
@@ -23,6 +23,7 @@ __all__ = [
     "acting_as",
     "calling_actor",
     "current_node",
+    "waiting_for_init",
     "enter_actor",
     "latest_graph",
     "make_latest",
@@ -68,6 +69,23 @@ def acting_as(actor: Any) -> Iterator[Any]:
                 state.pop(key, None)
             else:
                 state[key] = value
+
+
+def waiting_for_init() -> List[Callable[[Any], None]]:
+    """What the calling code created before ``rospy.init_node``, to attach to its node then.
+
+    rospy lets a publisher, subscriber or service proxy be made before ``init_node`` (the
+    tutorials' talker does); each registers here and is attached when the node exists.
+    """
+    actor = calling_actor()
+    if actor is not None:
+        return actor.waiting_for_init
+    graph = latest_graph()
+    owner, waiting = getattr(_local, "waiting_for_init", (None, []))
+    if owner is not graph:  # what was made for an earlier graph never joins this one
+        waiting = []
+        _local.waiting_for_init = (graph, waiting)
+    return waiting
 
 
 def node_stack() -> List[Any]:

@@ -134,6 +134,8 @@ class _Actor:
         self.interrupt: Optional[KeyboardInterrupt] = None
         self.stack: List[Node] = []  # the nodes whose callbacks run inside this node's code
         self.label = str(launch.get("name") or getattr(target, "__name__", "node"))
+        #: Handles its code made before init_node, attached to its node then.
+        self.waiting_for_init: List[Callable[[Node], None]] = []
         self.thread: Optional[threading.Thread] = None
         self.greenlet: Any = None
         self.home: Optional[int] = None  # the thread a greenlet runs in

@@ -1,5 +1,9 @@
 """Make robot code's imports (``import rospy``, ``from std_msgs.msg import String``...) work.
 
+The names served: ``rospy``, ``duckietown.dtros``, every message package of
+:mod:`duckielib.messages`, and on the laptop the libraries of :mod:`duckielib.libraries`
+(``cv_bridge``, ``rosbag``, ``message_filters``).
+
 Code written for a Duckiebot imports rospy, the message packages and Duckietown's ``DTROS``
 by their usual names. Once :mod:`duckielib.ros` is imported, those names resolve to the
 in-process graph and the course's message classes wherever nothing else provides them: a
@@ -20,10 +24,11 @@ from __future__ import annotations
 import contextlib
 import importlib.abc
 import importlib.machinery
+import runpy
 import sys
 import types
 from pathlib import Path
-from typing import Dict, Iterator, List, Optional, Sequence
+from typing import Callable, Dict, Iterator, List, Optional, Sequence, Union
 
 from duckielib import messages
 from duckielib.ros import dtros, rospy
@@ -33,6 +38,7 @@ __all__ = [
     "RobotImports",
     "install_modules",
     "modules_installed",
+    "node_script",
     "provided_elsewhere",
     "uninstall_modules",
 ]
@@ -64,6 +70,26 @@ def _aliases() -> Dict[str, Dict[str, types.ModuleType]]:
             if hasattr(module, kind):
                 found[package][f"{package}.{kind}"] = getattr(module, kind)
     return found
+
+
+_LIBRARIES: Dict[str, Dict[str, str]] = {}
+
+
+def _library_modules() -> Dict[str, str]:
+    """The ROS libraries served besides rospy (``cv_bridge``, ``rosbag``, ``message_filters``).
+
+    Import name -> the module of :mod:`duckielib.libraries` that stands for it. They live on
+    the laptop only: where this copy of duckielib has no such package (on a robot, which has
+    the real ones) this is empty.
+    """
+    if "modules" not in _LIBRARIES:
+        beside = Path(__file__).resolve().parents[1] / "libraries" / "__init__.py"
+        if beside.is_file():
+            libraries = importlib.import_module("duckielib.libraries")
+            _LIBRARIES["modules"] = dict(libraries.MODULES)
+        else:
+            _LIBRARIES["modules"] = {}
+    return _LIBRARIES["modules"]
 
 
 def _is_ours(module: object) -> bool:
@@ -152,6 +178,8 @@ class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     ) -> Optional[importlib.machinery.ModuleSpec]:
         """A spec for a name the course serves (``rospy``, ``std_msgs.msg``...), else None."""
         top = fullname.partition(".")[0]
+        if fullname in _library_modules():
+            return importlib.machinery.ModuleSpec(fullname, self)
         if top not in _SERVED:
             # Last of all: a package of one's own in the current folder (its msg/ and srv/
             # folders are then served by PackageDefinitions).
@@ -176,6 +204,13 @@ class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
     def exec_module(self, module: types.ModuleType) -> None:
         """Put duckielib's modules for the name's package into ``sys.modules``."""
         top = module.__name__.partition(".")[0]
+        libraries = _library_modules()
+        if module.__name__ in libraries:
+            for name, path in libraries.items():  # rosbag, and rosbag.bag with it
+                same_top = name.partition(".")[0] == top
+                if same_top and (name == module.__name__ or name not in sys.modules):
+                    sys.modules[name] = importlib.import_module(path)
+            return
         if top not in _SERVED:
             return  # a package folder of one's own: its __path__ is all it needs
         for name, served in _aliases()[top].items():
@@ -275,3 +310,40 @@ def _register_finder() -> None:
 
 
 _register_finder()
+
+
+#: The process's own command line, before any node script set its own.
+_PROCESS_ARGV: Dict[str, List[str]] = {}
+
+
+def node_script(path: Union[str, Path], *args: str) -> Callable[[], None]:
+    """A node written as a script, ready to launch: ``graph.launch(node_script("talker.py"))``.
+
+    The script runs as ``python talker.py ARGS`` would run it on a robot: as ``__main__``,
+    with ``sys.argv`` its path and ``args`` while it starts, and its folder first on the
+    import path (so a package of its own beside it imports). Its robot imports (``rospy``, the
+    message packages, ``duckietown.dtros``) are the in-process graph's wherever no real ROS is
+    on the path, as for any code; launch it inside ``modules_installed(replace_real=True)``
+    to use them even there.
+
+    Raises:
+        FileNotFoundError: if there is no such file (when the node starts).
+    """
+    script = Path(path).resolve()
+
+    def run_script() -> None:
+        if not script.is_file():
+            raise FileNotFoundError(f"There is no node script {script}.")
+        folder = str(script.parent)
+        if folder not in sys.path:
+            sys.path.insert(0, folder)
+        _PROCESS_ARGV.setdefault("argv", sys.argv)
+        sys.argv = argv = [str(script), *args]
+        try:
+            runpy.run_path(str(script), run_name="__main__")
+        finally:
+            if sys.argv is argv:  # no other script has started since
+                sys.argv = _PROCESS_ARGV["argv"]
+
+    run_script.__name__ = script.stem
+    return run_script

@@ -34,7 +34,7 @@ import collections
 import os
 import sys
 import time
-from typing import Any, Callable, Deque, List, Optional, Type, Union
+from typing import Any, Callable, Deque, List, Optional, Type, Union, cast
 
 from duckielib import rostime
 from duckielib.errors import MessageError
@@ -47,6 +47,7 @@ from duckielib.ros.context import (
     latest_graph,
     node_context,
     node_stack,
+    waiting_for_init,
 )
 from duckielib.ros.exceptions import (
     ROSException,
@@ -422,6 +423,26 @@ def init_node(
     for key, value in params.items():
         graph.set_param(node.resolve_param("~" + key.lstrip("~")), value)
     graph.add_node(node)
+    _attach_waiting(node)
+
+
+def _attach_waiting(node: Node) -> None:
+    waiting = waiting_for_init()
+    while waiting:
+        waiting.pop(0)(node)
+
+
+def _node_or_later(attach: Callable[[Node], None]) -> None:
+    """Run ``attach(node)`` now, or once the calling code has called ``init_node``.
+
+    rospy allows publishers, subscribers and service proxies made before ``init_node``.
+    """
+    try:
+        node = current_node()
+    except ROSInitException:
+        waiting_for_init().append(attach)
+    else:
+        attach(node)
 
 
 def _argument_value(text: str) -> Any:
@@ -566,8 +587,7 @@ class Publisher:
         _check_data_class(data_class, "rospy.Publisher")
         if data_class is AnyMsg:
             raise ValueError("rospy.Publisher needs a concrete message class, not AnyMsg.")
-        self._node: Node = current_node("rospy.Publisher")
-        self.resolved_name = self.name = self._node.resolve(name)
+        self.resolved_name = self.name = name  # resolved once the node exists
         self.data_class = data_class
         self.type = data_class._type
         self.md5sum = data_class._md5sum
@@ -575,11 +595,17 @@ class Publisher:
         self.queue_size = queue_size
         self.subscriber_listener: Optional[SubscribeListener] = subscriber_listener
         self._seq = 0
-        self._record: Optional[TopicRecord] = self._node.topic(self.name, data_class, "publish on")
+        self._record: Optional[TopicRecord] = None
+        _node_or_later(self._attach)
+
+    def _attach(self, node: Node) -> None:
+        self._node = node
+        self.resolved_name = self.name = node.resolve(self.name)
+        self._record = node.topic(self.name, self.data_class, "publish on")
         self._record.publishers.append(self)
-        self._node.publishers.append(self)
-        if queue_size is None:
-            self._node.log(
+        node.publishers.append(self)
+        if self.queue_size is None:
+            node.log(
                 WARN,
                 f"The publisher of {self.name} should be created with an explicit keyword "
                 "argument 'queue_size'.",
@@ -599,6 +625,10 @@ class Publisher:
             TypeError: if the message is of another type than the topic's.
         """
         if self._record is None:
+            if not hasattr(self, "_node"):
+                raise ROSInitException(
+                    f"publish() on {self.name} needs a node: call rospy.init_node('name') first."
+                )
             if self._node.is_shutdown:
                 return  # as rospy: a node that has shut down publishes nothing, quietly
             raise ROSException(f"publish() to an unregistered() handle (topic {self.name}).")
@@ -664,8 +694,7 @@ class Subscriber:
     ) -> None:
         _check_dt_options("rospy.Subscriber", dt_options)
         _check_data_class(data_class, "rospy.Subscriber")
-        self._node: Node = current_node("rospy.Subscriber")
-        self.resolved_name = self.name = self._node.resolve(name)
+        self.resolved_name = self.name = name  # resolved once the node exists
         self.data_class = data_class
         self.type = data_class._type
         self.callback = callback
@@ -674,11 +703,17 @@ class Subscriber:
         self._queue: Deque[bytes] = collections.deque(maxlen=queue_size or None)
         self._scheduled = False
         self.dropped = 0
-        self._record: Optional[TopicRecord] = self._node.topic(
-            self.name, data_class, "subscribe to"
-        )
+        self._record: Optional[TopicRecord] = None
+        _node_or_later(self._attach)
+
+    def _attach(self, node: Node) -> None:
+        self._node = node
+        self.resolved_name = self.name = node.resolve(self.name)
+        # AnyMsg stands for any message class: the topic record reads only its type names.
+        data_class = cast(Type[Message], self.data_class)
+        self._record = node.topic(self.name, data_class, "subscribe to")
         self._record.subscribers.append(self)
-        self._node.subscribers.append(self)
+        node.subscribers.append(self)
         for data in self._record.latched.values():
             self._enqueue(data)
         for publisher in list(self._record.publishers):
@@ -865,13 +900,17 @@ class ServiceProxy:
         headers: Any = None,
     ) -> None:
         _check_service_class(service_class, "rospy.ServiceProxy")
-        self._node: Node = current_node("rospy.ServiceProxy")
-        self.resolved_name = self.name = self._node.resolve(name)
+        self.resolved_name = self.name = name  # resolved once the node exists
+        _node_or_later(self._attach)
         self.service_class = service_class
         self.request_class = service_class._request_class
         self.response_class = service_class._response_class
         self.persistent = persistent
         self._closed = False
+
+    def _attach(self, node: Node) -> None:
+        self._node = node
+        self.resolved_name = self.name = node.resolve(self.name)
 
     def wait_for_service(self, timeout: Optional[float] = None) -> None:
         """Wait until the service is offered (see :func:`wait_for_service`)."""

@@ -54,10 +54,12 @@ __all__ = [
 ROOT = PROJECT_ROOT
 
 #: The packages of ``duckielib/`` that stay on the laptop: the simulator (pymunk), bags
-#: (rosbags), plots (matplotlib), the tools (the ``duckie`` command and what it runs) and
-#: JupyterLab's settings. Everything else in ``duckielib/`` is deployed to the robot, so it
-#: must run on Python 3.8 with the standard library and numpy only (the tests check it).
-LAPTOP_PACKAGES = ("bags", "lab", "plots", "sim", "tools")
+#: (rosbags), plots (matplotlib), the tools (the ``duckie`` command and what it runs),
+#: JupyterLab's settings and the in-process ROS libraries (cv_bridge, rosbag,
+#: message_filters: the robot has the real ones). Everything else in ``duckielib/`` is
+#: deployed to the robot, so it must run on Python 3.8 with the standard library and numpy
+#: only (the tests check it).
+LAPTOP_PACKAGES = ("bags", "lab", "libraries", "plots", "sim", "tools")
 
 #: The Duckietown project for the robot.
 PROJECT = ROOT / "robot_nodes"

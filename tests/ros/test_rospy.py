@@ -487,8 +487,24 @@ def test_calls_before_init_node_explain_what_to_do():
     Graph(stdout=io.StringIO())
     with pytest.raises(rospy.ROSInitException, match=r"call rospy.init_node\('name'\) first"):
         rospy.Time.now()
-    with pytest.raises(rospy.ROSInitException, match=r"rospy\.Publisher needs a node"):
-        rospy.Publisher("chatter", String, queue_size=1)
+    # As in rospy, handles may be made first (the tutorials' talker does); they need the node
+    # only to be used.
+    pub = rospy.Publisher("chatter", String, queue_size=1)
+    with pytest.raises(rospy.ROSInitException, match=r"publish\(\) on chatter needs a node"):
+        pub.publish(String(data="too early"))
+
+
+def test_handles_made_before_init_node_join_the_node(graph):
+    heard = []
+    pub = rospy.Publisher("chatter", String, queue_size=10)
+    sub = rospy.Subscriber("chatter", String, heard.append)
+    proxy = rospy.ServiceProxy("add", ChangePattern)
+    rospy.init_node("early", anonymous=False)
+    assert (pub.name, sub.name, proxy.name) == ("/chatter", "/chatter", "/add")
+    pub.publish(String(data="now"))
+    graph.run(0.0)
+    assert [msg.data for msg in heard] == ["now"]
+    assert graph.topics["/chatter"].publishers == [pub]
 
 
 # -- shutdown -----------------------------------------------------------------------------------

@@ -1,0 +1,36 @@
+"""In-process versions of the ROS libraries robot code imports besides rospy.
+
+A Duckiebot's nodes import more than rospy: ``cv_bridge`` to turn camera messages into
+OpenCV images, ``rosbag`` to write and read bags, ``message_filters`` to pair messages of
+several topics by their stamps. The robot has the real ones; this laptop has none of them
+(OpenCV itself, ``cv2``, comes from the ``opencv-python-headless`` package). The modules here
+behave as the real ones on the in-process graph, so such nodes run unchanged in a notebook or
+in ``duckie mission``:
+
+- :mod:`~duckielib.libraries.cv_bridge`: ``CvBridge`` and ``CvBridgeError`` (vision_opencv).
+- :mod:`~duckielib.libraries.rosbag`: ``Bag`` and its exceptions, on :mod:`duckielib.bags`.
+- :mod:`~duckielib.libraries.message_filters`: ``Subscriber``, ``Cache``,
+  ``TimeSynchronizer`` and ``ApproximateTimeSynchronizer`` on the in-process rospy.
+
+They are served by name only where no real one is installed: :data:`MODULES` says which
+module stands for which name. Importing this package imports none of them (nor OpenCV).
+
+Laptop side; never deployed.
+"""
+
+from __future__ import annotations
+
+from typing import Dict
+
+__all__ = ["MODULES"]
+
+#: The names robot code imports, each with the module of this package that stands for it.
+#: A dotted name is a submodule robot code also imports (``from rosbag.bag import Bag``);
+#: it is the same module as its package's.
+MODULES: Dict[str, str] = {
+    "cv_bridge": "duckielib.libraries.cv_bridge",
+    "cv_bridge.core": "duckielib.libraries.cv_bridge",
+    "rosbag": "duckielib.libraries.rosbag",
+    "rosbag.bag": "duckielib.libraries.rosbag",
+    "message_filters": "duckielib.libraries.message_filters",
+}
