@@ -31,15 +31,17 @@ simulated seconds, as ``rospy.sleep`` does, and says so once (importing this mod
 from __future__ import annotations
 
 import collections
+import io
 import os
 import sys
 import time
 from typing import Any, Callable, Deque, List, Optional, Type, Union, cast
 
 from duckielib import rostime
-from duckielib.errors import MessageError
+from duckielib.errors import MessageError, UnknownTypeError
 from duckielib.messages import Message
 from duckielib.messages import Service as ServiceType
+from duckielib.messages import get_message_class as messages_get_class
 from duckielib.ros import names
 from duckielib.ros.context import (
     calling_actor,
@@ -533,6 +535,36 @@ def _check_data_class(data_class: Any, what: str) -> None:
         )
 
 
+def _course_class(data_class: Any, what: str) -> Any:
+    """The class to use for ``data_class``: itself, or the course's class of its type.
+
+    A class generated elsewhere (by genpy, in a catkin build) is replaced by the course's class
+    of the same type and definition, so its messages travel the graph as bytes.
+
+    Raises:
+        ValueError: if a class generated elsewhere is of a type the course does not know, or
+            has another definition than the course's (another md5 sum).
+    """
+    _check_data_class(data_class, what)
+    if hasattr(data_class, "from_bytes"):
+        return data_class  # the course's own (or AnyMsg)
+    name = str(getattr(data_class, "_type", data_class.__name__))
+    try:
+        ours = messages_get_class(name)
+    except UnknownTypeError:
+        raise ValueError(
+            f"{what}: {name} comes from a module generated outside this course, for a type the "
+            "course does not know. Put its .msg file in the msg/ folder of your package, beside "
+            "your node, and import it from there."
+        ) from None
+    if ours._md5sum != data_class._md5sum:
+        raise ValueError(
+            f"{what}: your {name} has another definition than the robot's (md5 sum "
+            f"{data_class._md5sum}, the robot's is {ours._md5sum}); use the robot's definition."
+        )
+    return ours
+
+
 def _check_dt_options(what: str, options: dict) -> None:
     """Accept Duckietown's extra keywords (``dt_topic_type``, ``dt_help``...), refuse others."""
     unknown = sorted(key for key in options if not key.startswith("dt_"))
@@ -549,6 +581,10 @@ def _to_message(data_class: Type[Message], args: tuple, kwds: dict) -> Any:
     if len(args) == 1:
         arg = args[0]
         if getattr(arg, "_md5sum", None) == data_class._md5sum:
+            if not isinstance(arg, Message) and hasattr(arg, "serialize"):
+                buffer = io.BytesIO()  # a message of a class generated elsewhere (genpy)
+                arg.serialize(buffer)
+                return data_class.from_bytes(buffer.getvalue())
             return arg
         if isinstance(arg, Message):
             expected = data_class._slot_types[0] if data_class._slot_types else ""
@@ -584,7 +620,7 @@ class Publisher:
         **dt_options: Any,
     ) -> None:
         _check_dt_options("rospy.Publisher", dt_options)
-        _check_data_class(data_class, "rospy.Publisher")
+        data_class = _course_class(data_class, "rospy.Publisher")
         if data_class is AnyMsg:
             raise ValueError("rospy.Publisher needs a concrete message class, not AnyMsg.")
         self.resolved_name = self.name = name  # resolved once the node exists
@@ -693,7 +729,7 @@ class Subscriber:
         **dt_options: Any,
     ) -> None:
         _check_dt_options("rospy.Subscriber", dt_options)
-        _check_data_class(data_class, "rospy.Subscriber")
+        data_class = _course_class(data_class, "rospy.Subscriber")
         self.resolved_name = self.name = name  # resolved once the node exists
         self.data_class = data_class
         self.type = data_class._type

@@ -84,3 +84,37 @@ def test_genpy_header_bytes_match(ros_import):
     theirs.serialize(buffer)
     ours = messages.Header(seq=3, stamp=Time(5, 6), frame_id="map")
     assert ours.to_bytes() == buffer.getvalue()
+
+
+def test_classes_genpy_generated_work_on_the_graph(generate, ros_import):
+    # A node that imports message modules a catkin build generated (genpy's classes), not ours.
+    from duckielib.ros import Graph, rospy
+
+    genpy_pose = generate(messages.Pose2DStamped)
+    graph = Graph(stdout=io.StringIO())
+    heard = []
+    rospy.init_node("generated")
+    pub = rospy.Publisher("pose", genpy_pose, queue_size=1)
+    rospy.Subscriber("pose", genpy_pose, heard.append)
+    pub.publish(genpy_pose(x=1.5, y=-2.0, theta=0.25))
+    pub.publish(x=0.5)
+    graph.run(0.0)
+    assert [(msg.x, msg.y, msg.theta) for msg in heard] == [(1.5, -2.0, 0.25), (0.5, 0.0, 0.0)]
+    graph.shutdown()
+
+
+def test_a_generated_class_of_another_definition_is_refused_with_a_sentence(ros_import):
+    from duckielib.ros import Graph, rospy
+
+    dynamic = ros_import("genpy.dynamic")
+    other = dynamic.generate_dynamic("duckietown_msgs/Pose2DStamped", "float64 x\nfloat64 y\n")[
+        "duckietown_msgs/Pose2DStamped"
+    ]
+    unknown = dynamic.generate_dynamic("my_pkg/Reading", "float32 value\n")["my_pkg/Reading"]
+    graph = Graph(stdout=io.StringIO())
+    rospy.init_node("generated")
+    with pytest.raises(ValueError, match=r"another definition than the robot's \(md5 sum"):
+        rospy.Publisher("pose", other, queue_size=1)
+    with pytest.raises(ValueError, match=r"Put its \.msg file in the msg/ folder"):
+        rospy.Subscriber("reading", unknown, print)
+    graph.shutdown()
