@@ -297,7 +297,9 @@ class Message:
         tick.data += 3
     """
 
-    __slots__: ClassVar[Tuple[str, ...]] = ()
+    # Every message may carry the connection header it arrived with, as rospy sets it on what
+    # a subscriber receives (``msg._connection_header["callerid"]``: who published it).
+    __slots__ = ("_connection_header",)
     _type: ClassVar[str] = ""
     _md5sum: ClassVar[str] = ""
     _full_text: ClassVar[str] = ""
@@ -332,6 +334,9 @@ class Message:
     def __setattr__(self, key: str, value: Any) -> None:
         codec = self._codecs.get(key)
         if codec is None:
+            if key == "_connection_header":
+                object.__setattr__(self, key, value)
+                return
             raise AttributeError(
                 f"{type(self).__name__} has no field {key!r}; "
                 f"its fields are: {', '.join(self.__slots__)}."

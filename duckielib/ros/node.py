@@ -70,11 +70,19 @@ class TopicRecord:
         return self.data_class._type
 
     def connection_header(self) -> Dict[str, str]:
-        """What a ROS 1 connection header says of this topic (for ``AnyMsg`` subscribers)."""
+        """What a ROS 1 connection header says of this topic (a copy, to keep)."""
+        return dict(self.shared_connection_header())
+
+    def shared_connection_header(self) -> Dict[str, str]:
+        """The connection header, one dict shared by the messages subscribers receive.
+
+        rospy gives every message of a connection the same dict; it changes here only when
+        the topic's publishers do.
+        """
         key = (self.data_class, *self.publishers)
         if self._header_key != key:
             self._header, self._header_key = self._make_connection_header(), key
-        return dict(self._header)
+        return self._header
 
     def _make_connection_header(self) -> Dict[str, str]:
         callers = [publisher.node.name for publisher in self.publishers]

@@ -793,8 +793,7 @@ class Subscriber:
         stack = node_stack()
         while queue and self._record is not None:
             message = self.data_class.from_bytes(queue.popleft())
-            if self.data_class is AnyMsg:
-                message._connection_header = self._record.connection_header()
+            message._connection_header = self._record.shared_connection_header()
             if self.callback is None:
                 continue
             stack.append(self._node)  # the callback runs as its node

@@ -155,3 +155,23 @@ def test_a_duckietown_node_with_help_parameters_and_a_switch(graph):
         DTParam("~missing")
     with pytest.raises(ValueError, match="below min_value"):
         DTParam("~speed", default=-1.0, param_type=ParamType.FLOAT, min_value=0.0)
+
+
+def test_a_received_message_carries_its_connection_header(graph):
+    heard = []
+
+    def talker():
+        rospy.init_node("talker")
+        rospy.Publisher("chatter", String, queue_size=1, latch=True).publish(String(data="hi"))
+        rospy.spin()
+
+    graph.launch(talker)
+    rospy.init_node("listener")
+    rospy.Subscriber("chatter", String, heard.append)
+    graph.run(0.1)
+    header = heard[0]._connection_header
+    assert header["callerid"] == "/talker"
+    assert header["topic"] == "/chatter"
+    assert header["type"] == "std_msgs/String"
+    assert header["md5sum"] == String._md5sum
+    assert header["latching"] == "1"
