@@ -1,0 +1,173 @@
+"""rospy's API on the in-process graph: the same names, arguments and behaviour.
+
+Use it exactly as rospy::
+
+    from duckielib.ros import rospy
+    from duckielib.messages import String
+
+    def talker():
+        rospy.init_node("talker")
+        pub = rospy.Publisher("chatter", String, queue_size=10)
+        rate = rospy.Rate(10)  # 10 Hz of simulated time
+        while not rospy.is_shutdown():
+            pub.publish(String(data="hello"))
+            rate.sleep()
+
+The graph (:class:`~duckielib.ros.graph.Graph`) runs such code on simulated time. Differences
+from rospy are deliberate and small: several nodes share one process (each has its own
+``init_node``); a message published to a topic of another type, or with a bad field value,
+fails at once with a sentence saying why; ``Time.now()`` is the simulator's clock.
+
+Simulated time moves only while every node waits. A node's main code that never waits (a
+loop that polls, ``while distance < goal: pub.publish(cmd)``) is charged
+:data:`CALL_COST_NS` of simulated time for each ``publish``, ``is_shutdown``, ``get_time``,
+``get_rostime`` or ``Time.now`` it calls, and waits whenever it owes a millisecond: its loop
+then runs about ten thousand times per simulated second, and the robot, the clock and the
+other nodes go on meanwhile. Callbacks are not charged. ``time.sleep`` in a node's code waits
+simulated seconds, as ``rospy.sleep`` does, and says so once (importing this module makes
+``time.sleep`` do that; anywhere else it is the wall clock's, as always).
+
+The package is split as rospy itself is: :mod:`.client` (nodes, names, parameters),
+:mod:`.topics`, :mod:`.services`, :mod:`.timing` (time, sleeping, rates and timers),
+:mod:`.logs`, and :mod:`.core` (waiting as a node); every name is here, at the top.
+"""
+
+from __future__ import annotations
+
+from duckielib.ros.exceptions import (
+    ROSException,
+    ROSInitException,
+    ROSInterruptException,
+    ROSSerializationException,
+    ROSTimeMovedBackwardsException,
+    ServiceException,
+    TransportException,
+)
+from duckielib.ros.log import DEBUG, ERROR, FATAL, INFO, WARN
+from duckielib.ros.rospy.client import (
+    delete_param,
+    get_caller_id,
+    get_name,
+    get_namespace,
+    get_param,
+    get_param_cached,
+    get_param_names,
+    has_param,
+    init_node,
+    is_shutdown,
+    myargv,
+    on_shutdown,
+    resolve_name,
+    search_param,
+    set_param,
+    signal_shutdown,
+    spin,
+)
+from duckielib.ros.rospy.core import (
+    CALL_COST_NS,
+)
+from duckielib.ros.rospy.logs import (
+    logdebug,
+    logdebug_once,
+    logdebug_throttle,
+    logerr,
+    logerr_once,
+    logerr_throttle,
+    logfatal,
+    loginfo,
+    loginfo_once,
+    loginfo_throttle,
+    logwarn,
+    logwarn_once,
+    logwarn_throttle,
+)
+from duckielib.ros.rospy.services import (
+    Service,
+    ServiceProxy,
+    wait_for_service,
+)
+from duckielib.ros.rospy.timing import (
+    Duration,
+    Rate,
+    Time,
+    Timer,
+    TimerEvent,
+    get_rostime,
+    get_time,
+    sleep,
+)
+from duckielib.ros.rospy.topics import (
+    AnyMsg,
+    Publisher,
+    SubscribeListener,
+    Subscriber,
+    wait_for_message,
+)
+
+__all__ = [
+    # nodes
+    "init_node",
+    "get_name",
+    "get_caller_id",
+    "get_namespace",
+    "resolve_name",
+    "is_shutdown",
+    "signal_shutdown",
+    "on_shutdown",
+    "spin",
+    "myargv",
+    # topics and services
+    "Publisher",
+    "SubscribeListener",
+    "Subscriber",
+    "Service",
+    "ServiceProxy",
+    "wait_for_service",
+    "wait_for_message",
+    "AnyMsg",
+    # parameters
+    "get_param",
+    "get_param_cached",
+    "set_param",
+    "has_param",
+    "delete_param",
+    "search_param",
+    "get_param_names",
+    # time
+    "Time",
+    "Duration",
+    "Rate",
+    "Timer",
+    "TimerEvent",
+    "sleep",
+    "get_rostime",
+    "get_time",
+    # logging
+    "logdebug",
+    "loginfo",
+    "logwarn",
+    "logerr",
+    "logfatal",
+    "logdebug_throttle",
+    "loginfo_throttle",
+    "logwarn_throttle",
+    "logerr_throttle",
+    "logdebug_once",
+    "loginfo_once",
+    "logwarn_once",
+    "logerr_once",
+    "DEBUG",
+    "INFO",
+    "WARN",
+    "ERROR",
+    "FATAL",
+    "CALL_COST_NS",
+    # exceptions
+    "ROSException",
+    "ROSInitException",
+    "ROSInterruptException",
+    "ROSSerializationException",
+    "ROSTimeMovedBackwardsException",
+    "ServiceException",
+    "TransportException",
+]

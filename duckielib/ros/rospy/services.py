@@ -1,0 +1,205 @@
+"""rospy's services: ``Service``, ``ServiceProxy``, ``wait_for_service``.
+
+Pure: standard library only, Python 3.8 (deployed to the robot).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Optional, Type
+
+from duckielib.errors import MessageError
+from duckielib.messages import Message
+from duckielib.messages import Service as ServiceType
+from duckielib.ros.context import (
+    current_node,
+    node_context,
+)
+from duckielib.ros.exceptions import (
+    ROSException,
+    ROSInterruptException,
+    ROSSerializationException,
+    ServiceException,
+)
+from duckielib.ros.log import ERROR, format_error
+from duckielib.ros.node import Node, ServiceRecord
+from duckielib.ros.rospy.client import spin
+from duckielib.ros.rospy.core import _node_or_later
+from duckielib.ros.rospy.timing import _to_ns
+from duckielib.ros.rospy.topics import _to_message
+
+
+# -- services -----------------------------------------------------------------------------------
+def _check_service_class(service_class: Any, what: str) -> None:
+    if not (isinstance(service_class, type) and hasattr(service_class, "_request_class")):
+        raise ValueError(
+            f"{what} needs a service class such as ChangePattern, not {service_class!r}."
+        )
+
+
+class Service:
+    """Offer a service: ``handler(request)`` returns the response.
+
+    The handler may return the response message, a dict of its fields, a tuple of them, or a
+    single value for a one-field response, as in rospy. Raising ``rospy.ServiceException``
+    sends the caller that error.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        service_class: Type[ServiceType],
+        handler: Callable[[Any], Any],
+        buff_size: int = 65536,
+        error_handler: Optional[Callable[..., Any]] = None,
+    ) -> None:
+        _check_service_class(service_class, "rospy.Service")
+        self._node: Node = current_node("rospy.Service")
+        self.resolved_name = self.name = self._node.resolve(name)
+        self.service_class = service_class
+        self.request_class = service_class._request_class
+        self.response_class = service_class._response_class
+        self.handler = handler
+        existing = self._node.graph.services.get(self.name)
+        if existing is not None and existing.node is self._node:
+            raise ServiceException(f"service [{self.name}] already registered")
+        self._record: Optional[ServiceRecord] = ServiceRecord(
+            self.name, service_class, handler, self._node, error_handler
+        )
+        self._node.graph.services[self.name] = self._record
+        self._node.services.append(self._record)
+
+    def shutdown(self, reason: str = "") -> None:
+        """Stop offering the service."""
+        record, self._record = self._record, None
+        if record is None:
+            return
+        if self._node.graph.services.get(self.name) is record:
+            del self._node.graph.services[self.name]
+        if record in self._node.services:
+            self._node.services.remove(record)
+
+    unregister = shutdown
+
+    def spin(self) -> None:
+        """Keep the node alive until it shuts down (as ``rospy.spin()``)."""
+        spin()
+
+
+def _response_from(value: Any, response_class: Type[Message]) -> Any:
+    if isinstance(value, Message) and value._type == response_class._type:
+        return value
+    if isinstance(value, dict):
+        try:
+            return response_class(**value)
+        except AttributeError as error:
+            raise ServiceException(f"handler returned invalid value: {error}") from None
+    if value is None:
+        raise ServiceException("service handler returned None")
+    try:
+        if isinstance(value, (list, tuple)):
+            return response_class(*value)
+        return response_class(value)
+    except TypeError as error:
+        raise ServiceException(f"handler returned invalid value: {error}") from None
+
+
+class ServiceProxy:
+    """Call a service as a function: ``proxy(request)`` or ``proxy(field=value, ...)``.
+
+    The call blocks the caller until the handler has answered, as in rospy.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        service_class: Type[ServiceType],
+        persistent: bool = False,
+        headers: Any = None,
+    ) -> None:
+        _check_service_class(service_class, "rospy.ServiceProxy")
+        self.resolved_name = self.name = name  # resolved once the node exists
+        _node_or_later(self._attach)
+        self.service_class = service_class
+        self.request_class = service_class._request_class
+        self.response_class = service_class._response_class
+        self.persistent = persistent
+        self._closed = False
+
+    def _attach(self, node: Node) -> None:
+        self._node = node
+        self.resolved_name = self.name = node.resolve(self.name)
+
+    def wait_for_service(self, timeout: Optional[float] = None) -> None:
+        """Wait until the service is offered (see :func:`wait_for_service`)."""
+        wait_for_service(self.resolved_name, timeout)
+
+    def __call__(self, *args: Any, **kwds: Any) -> Any:
+        """Same as :meth:`call`."""
+        return self.call(*args, **kwds)
+
+    def call(self, *args: Any, **kwds: Any) -> Any:
+        """Send a request and return the response.
+
+        Raises:
+            ServiceException: if nobody offers the service, the types differ, or the handler
+                failed.
+        """
+        if self._closed:
+            raise ServiceException(f"service [{self.name}] proxy was closed")
+        request = _to_message(self.request_class, args, kwds)
+        record: Optional[ServiceRecord] = self._node.graph.services.get(self.name)
+        if record is None:
+            raise ServiceException(f"service [{self.name}] unavailable")
+        if record.service_class._md5sum != self.service_class._md5sum:
+            raise ServiceException(
+                f"service [{self.name}] is of type {record.type}, but this proxy calls it as "
+                f"{self.service_class._type}."
+            )
+        try:
+            sent = record.service_class._request_class.from_bytes(request.to_bytes())
+        except MessageError as error:
+            raise ROSSerializationException(str(error)) from None
+        record.call_count += 1
+        with node_context(record.node):
+            try:
+                response = _response_from(
+                    record.handler(sent), record.service_class._response_class
+                )
+                data = response.to_bytes()
+            except ServiceException as error:
+                raise ServiceException(f"service cannot process request: {error}") from None
+            except Exception as error:
+                if record.error_handler is not None:
+                    record.error_handler(error, type(error), error, error.__traceback__)
+                else:
+                    record.node.log(
+                        ERROR, f"Error processing request: {error}\n{format_error(error)}"
+                    )
+                raise ServiceException(f"error processing request: {error}") from None
+        return self.response_class.from_bytes(data)
+
+    def close(self) -> None:
+        """Close a persistent connection."""
+        self._closed = True
+
+
+def wait_for_service(service: str, timeout: Optional[float] = None) -> None:
+    """Block until a service is offered.
+
+    Args:
+        service: the service name.
+        timeout: the longest wait, in simulated seconds (None: no limit).
+
+    Raises:
+        ROSException: if the timeout passes first.
+        ROSInterruptException: if the node shuts down while waiting.
+    """
+    node = current_node("rospy.wait_for_service()")
+    name = node.resolve(service)
+    graph = node.graph
+    deadline = None if timeout is None else graph.now_ns + _to_ns(timeout)
+    if graph.block(deadline, lambda: name in graph.services or node.is_shutdown):
+        if node.is_shutdown and name not in graph.services:
+            raise ROSInterruptException("rospy shutdown")
+        return
+    raise ROSException(f"timeout exceeded while waiting for service {name}")
