@@ -19,7 +19,8 @@ LAB_DIR ?= $(CURDIR)
 # ffmpeg, which writes animations as MP4.
 ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-genpy \
 	python3-genmsg python3-std-msgs python3-sensor-msgs python3-geometry-msgs python3-nav-msgs \
-	python3-std-srvs python3-tf2-msgs bubblewrap python3-venv chromium ffmpeg
+	python3-std-srvs python3-tf2-msgs python3-tf2-ros python3-tf bubblewrap python3-venv \
+	chromium ffmpeg
 
 .PHONY: help run test lab robot ros lint format bench lock clean
 

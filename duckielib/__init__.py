@@ -24,7 +24,7 @@ Laptop only:
     bags: ROS 1 bags with rosbags, and what a mission's bag shows.
     plots: matplotlib pictures of runs and the notebooks' diagrams.
     tools: the ``duckie`` command, the mission runner, deployment, benchmarks.
-    libraries: cv_bridge, rosbag and message_filters for robot code on the in-process graph.
+    libraries: cv_bridge, rosbag, message_filters, tf and tf2_ros for robot code in process.
     lab: JupyterLab's settings for students.
 
 Conventions, written down once: SI units (metres, seconds, radians); the robot frame has x

@@ -11,6 +11,12 @@ in ``duckie mission``:
 - :mod:`~duckielib.libraries.rosbag`: ``Bag`` and its exceptions, on :mod:`duckielib.bags`.
 - :mod:`~duckielib.libraries.message_filters`: ``Subscriber``, ``Cache``,
   ``TimeSynchronizer`` and ``ApproximateTimeSynchronizer`` on the in-process rospy.
+- :mod:`~duckielib.libraries.tf2_ros`: ``TransformBroadcaster``,
+  ``StaticTransformBroadcaster``, ``Buffer``, ``TransformListener`` and tf2's exceptions:
+  coordinate frames on ``/tf`` and ``/tf_static``.
+- :mod:`~duckielib.libraries.tf`: ROS 1's older ``tf`` (``TransformBroadcaster``,
+  ``TransformListener``) on tf2_ros, and ``tf.transformations`` (quaternions, Euler angles,
+  matrices).
 
 They are served by name only where no real one is installed: :data:`MODULES` says which
 module stands for which name. Importing this package imports none of them (nor OpenCV).
@@ -25,12 +31,16 @@ from typing import Dict
 __all__ = ["MODULES"]
 
 #: The names robot code imports, each with the module of this package that stands for it.
-#: A dotted name is a submodule robot code also imports (``from rosbag.bag import Bag``);
-#: it is the same module as its package's.
+#: A dotted name is a submodule robot code also imports (``from rosbag.bag import Bag``):
+#: the same module as its package's, or one its package's module holds as an attribute
+#: (``tf.transformations``).
 MODULES: Dict[str, str] = {
     "cv_bridge": "duckielib.libraries.cv_bridge",
     "cv_bridge.core": "duckielib.libraries.cv_bridge",
     "rosbag": "duckielib.libraries.rosbag",
     "rosbag.bag": "duckielib.libraries.rosbag",
     "message_filters": "duckielib.libraries.message_filters",
+    "tf": "duckielib.libraries.tf",
+    "tf.transformations": "duckielib.libraries.tf.transformations",
+    "tf2_ros": "duckielib.libraries.tf2_ros",
 }

@@ -2,7 +2,7 @@
 
 The names served: ``rospy``, ``duckietown.dtros``, every message package of
 :mod:`duckielib.messages`, and on the laptop the libraries of :mod:`duckielib.libraries`
-(``cv_bridge``, ``rosbag``, ``message_filters``).
+(``cv_bridge``, ``rosbag``, ``message_filters``, ``tf``, ``tf2_ros``).
 
 Code written for a Duckiebot imports rospy, the message packages and Duckietown's ``DTROS``
 by their usual names. Once :mod:`duckielib.ros` is imported, those names resolve to the
@@ -24,7 +24,6 @@ from __future__ import annotations
 import contextlib
 import importlib.abc
 import importlib.machinery
-import runpy
 import sys
 import types
 from pathlib import Path
@@ -76,7 +75,7 @@ _LIBRARIES: Dict[str, Dict[str, str]] = {}
 
 
 def _library_modules() -> Dict[str, str]:
-    """The ROS libraries served besides rospy (``cv_bridge``, ``rosbag``, ``message_filters``).
+    """The ROS libraries served besides rospy (``cv_bridge``, ``rosbag``, ``tf``...).
 
     Import name -> the module of :mod:`duckielib.libraries` that stands for it. They live on
     the laptop only: where this copy of duckielib has no such package (on a robot, which has
@@ -339,8 +338,12 @@ def node_script(path: Union[str, Path], *args: str) -> Callable[[], None]:
             sys.path.insert(0, folder)
         _PROCESS_ARGV.setdefault("argv", sys.argv)
         sys.argv = argv = [str(script), *args]
+        # Run it as __main__ without taking sys.modules["__main__"] (runpy would, for as long
+        # as the node lives, and a new process started meanwhile would run the script).
+        namespace = {"__name__": "__main__", "__file__": str(script), "__builtins__": __builtins__}
+        code = compile(script.read_text(encoding="utf-8"), str(script), "exec")
         try:
-            runpy.run_path(str(script), run_name="__main__")
+            exec(code, namespace)
         finally:
             if sys.argv is argv:  # no other script has started since
                 sys.argv = _PROCESS_ARGV["argv"]

@@ -56,7 +56,7 @@ ROOT = PROJECT_ROOT
 #: The packages of ``duckielib/`` that stay on the laptop: the simulator (pymunk), bags
 #: (rosbags), plots (matplotlib), the tools (the ``duckie`` command and what it runs),
 #: JupyterLab's settings and the in-process ROS libraries (cv_bridge, rosbag,
-#: message_filters: the robot has the real ones). Everything else in ``duckielib/`` is
+#: message_filters, tf, tf2_ros: the robot has the real ones). Everything else in ``duckielib/`` is
 #: deployed to the robot, so it must run on Python 3.8 with the standard library and numpy
 #: only (the tests check it).
 LAPTOP_PACKAGES = ("bags", "lab", "libraries", "plots", "sim", "tools")

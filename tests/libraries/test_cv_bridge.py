@@ -199,7 +199,10 @@ def test_importing_the_package_imports_neither_cv2_nor_the_modules():
         "'cv_bridge.core',",
         "'message_filters',",
         "'rosbag',",
-        "'rosbag.bag']",
+        "'rosbag.bag',",
+        "'tf',",
+        "'tf.transformations',",
+        "'tf2_ros']",
         "False",
         "False",
     ]

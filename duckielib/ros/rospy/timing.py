@@ -15,7 +15,6 @@ from duckielib import rostime
 from duckielib.ros.context import (
     calling_actor,
     current_node,
-    latest_graph,
     node_context,
     node_stack,
 )
@@ -204,10 +203,8 @@ def _sleeping_node() -> Optional[Node]:
     actor = calling_actor()
     if actor is not None:
         return actor.node  # a launched node's main code (None before init_node)
-    graph = latest_graph()
-    node = graph.foreground_node() if graph is not None else None
-    if node is not None and not node.graph.driving_here():
-        return node  # a notebook's own node
+    # A notebook's own code (and the libraries it calls, Jupyter's among them) keeps the wall
+    # clock: the graph does not run between cells anyway.
     return None
 
 
