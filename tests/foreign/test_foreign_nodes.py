@@ -157,3 +157,11 @@ def drive_forward():
     while not rospy.is_shutdown():
         pub.publish(Twist2DStamped(v=0.2, omega=0.0))
         rate.sleep()
+
+
+def test_a_script_runs_as_main_without_taking_the_processs_main(bot):
+    main = sys.modules["__main__"]
+    bot.graph.launch(node_script(NODES / "listener.py"))
+    bot.run(0.5)
+    assert "/listener" in " ".join(bot.graph.nodes), "the script's __main__ block ran"
+    assert sys.modules["__main__"] is main, "a process started now must not run the script"
