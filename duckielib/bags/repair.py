@@ -17,7 +17,7 @@ from duckielib.bags.io import BagWriter, PathLike
 from duckielib.errors import BagError
 from duckielib.rostime import NS_PER_S
 
-__all__ = ["RepairReport", "repair_bag"]
+__all__ = ["RepairReport", "copy_scanned", "repair_bag"]
 
 
 @dataclass
@@ -68,6 +68,22 @@ class RepairReport:
         return "\n".join(lines)
 
 
+def copy_scanned(scan: records.ScanResult, writer: BagWriter) -> None:
+    """Write every whole message a scan found, with its connection, into ``writer``."""
+    for connection_id, time_ns, data in scan.messages:
+        connection = scan.connections[connection_id]
+        writer.write_raw(
+            connection.topic,
+            connection.type,
+            connection.md5sum,
+            connection.message_definition,
+            time_ns,
+            data,
+            callerid=connection.callerid,
+            latching=connection.latching,
+        )
+
+
 def repair_bag(source: PathLike, output: PathLike, compression: str = "none") -> RepairReport:
     """Write every complete message of a damaged bag to a new bag.
 
@@ -104,23 +120,14 @@ def repair_bag(source: PathLike, output: PathLike, compression: str = "none") ->
         partial.unlink()
     try:
         with BagWriter(partial, compression) as writer:
-            for cid, time_ns, data in scan.messages:
-                connection = scan.connections[cid]
-                writer.write_raw(
-                    connection.topic,
-                    connection.type,
-                    connection.md5sum,
-                    connection.message_definition,
-                    time_ns,
-                    data,
-                    callerid=connection.callerid,
-                    latching=connection.latching,
-                )
-                report.counts[connection.topic] = report.counts.get(connection.topic, 0) + 1
+            copy_scanned(scan, writer)
         partial.replace(output)
     finally:
         if partial.exists():
             partial.unlink()
+    for connection_id, _, _ in scan.messages:
+        topic = scan.connections[connection_id].topic
+        report.counts[topic] = report.counts.get(topic, 0) + 1
     times = [time_ns for _, time_ns, _ in scan.messages]
     report.start_ns, report.end_ns = min(times), max(times)
     return report

@@ -44,6 +44,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple, Union
 from duckielib.bags import records
 from duckielib.bags.io import COMPRESSIONS, BagWriter, TopicInfo
 from duckielib.bags.io import Bag as CourseBag
+from duckielib.bags.repair import copy_scanned
 from duckielib.errors import BagError, UnknownTypeError
 from duckielib.messages import get_message_class
 from duckielib.ros import rospy
@@ -279,22 +280,7 @@ class Bag:
             self._path.unlink()
         self._writer = BagWriter(self._writing, self._compression)
         if existing:
-            self._copy(records.scan(self._path), self._writer)
-
-    @staticmethod
-    def _copy(scan: records.ScanResult, writer: BagWriter) -> None:
-        for connection_id, time_ns, data in scan.messages:
-            connection = scan.connections[connection_id]
-            writer.write_raw(
-                connection.topic,
-                connection.type,
-                connection.md5sum,
-                connection.message_definition,
-                time_ns,
-                data,
-                connection.callerid,
-                connection.latching,
-            )
+            copy_scanned(records.scan(self._path), self._writer)
 
     def _snapshot(self, path: Path) -> CourseBag:
         """A readable copy of a bag with no index (being written, or interrupted)."""
@@ -304,7 +290,7 @@ class Bag:
         self._snapshot_count += 1
         copy = self._snapshots / f"snapshot-{self._snapshot_count}.bag"
         with BagWriter(copy) as writer:
-            self._copy(records.scan(path), writer)
+            copy_scanned(records.scan(path), writer)
         return CourseBag(copy)
 
     def _readable(self) -> CourseBag:
