@@ -161,3 +161,19 @@ def test_time_sleep_outside_nodes_is_the_wall_clock():
     started = wallclock.perf_counter()
     wallclock.sleep(0.05)
     assert wallclock.perf_counter() - started >= 0.05
+
+
+def test_a_loop_with_no_shutdown_check_ends_when_the_graph_shuts_down(graph):
+    steps = []
+
+    def forever():
+        rospy.init_node("forever")
+        while True:  # as many student nodes loop
+            steps.append(rospy.get_time())
+            rospy.sleep(0.5)
+
+    graph.launch(forever)
+    graph.run(1.0)
+    graph.shutdown()
+    assert steps == [0.0, 0.5, 1.0]
+    assert all(actor.finished for actor in graph._actors)

@@ -79,7 +79,9 @@ def sleep(duration: Union[float, rostime.Duration]) -> None:
     """
     node = current_node("rospy.sleep()")
     if node.is_shutdown:
-        return  # as rospy on a robot's clock: a sleep after shutdown (in a hook) just returns
+        # As rospy on simulated time (on a robot's wall clock it would sleep and return): it
+        # is what ends a loop like ``while True: ...; rospy.sleep(1)`` once the node is over.
+        raise ROSInterruptException("ROS shutdown request")
     span = _to_ns(duration)
     if span <= 0:
         return
