@@ -56,6 +56,20 @@ def _stamp(message: Any) -> Optional[Any]:
     return getattr(header, "stamp", None)
 
 
+def _stamp_or_now(message: Any, allow_headerless: bool) -> Optional[Any]:
+    """A message's stamp, or the current ROS time for one without if that is allowed.
+
+    Returns None, and says why in the log, for a message without a stamp otherwise.
+    """
+    stamp = _stamp(message)
+    if stamp is not None:
+        return stamp
+    if not allow_headerless:
+        rospy.logwarn(_HEADERLESS)
+        return None
+    return rospy.Time.now()
+
+
 class SimpleFilter:
     """A filter: what it outputs goes to the callbacks registered on it."""
 
@@ -144,12 +158,9 @@ class Cache(SimpleFilter):
 
     def add(self, msg: Any) -> None:
         """Keep a message (dropping the oldest beyond ``cache_size``) and pass it along."""
-        stamp = _stamp(msg)
+        stamp = _stamp_or_now(msg, self.allow_headerless)
         if stamp is None:
-            if not self.allow_headerless:
-                rospy.logwarn(_HEADERLESS)
-                return
-            stamp = rospy.Time.now()
+            return
         key = stamp.to_nsec()
         index = bisect.bisect_right(self._keys, key)
         self._keys.insert(index, key)
@@ -281,12 +292,9 @@ class ApproximateTimeSynchronizer(TimeSynchronizer):
 
     def add(self, msg: Any, my_queue: Dict[int, Any], my_queue_index: Optional[int] = None) -> None:
         """Take a message of one input; call back if it completes a set within ``slop``."""
-        stamp = _stamp(msg)
+        stamp = _stamp_or_now(msg, self.allow_headerless)
         if stamp is None:
-            if not self.allow_headerless:
-                rospy.logwarn(_HEADERLESS)
-                return
-            stamp = rospy.Time.now()
+            return
         key = stamp.to_nsec()
         waiting = self._time_went_back(my_queue, my_queue_index)
         my_queue[key] = msg

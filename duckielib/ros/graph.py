@@ -533,6 +533,7 @@ class Graph(ParameterServer):
         if not names.is_legal_base_name(name):
             raise ValueError(f"{name!r} is not a legal node name: use letters, digits and '_'.")
         node = Node(self, name, namespace)
+        node.has_main_code = False
         old = self.nodes.get(node.name)
         if old is not None and not old.is_shutdown:
             old.shutdown("a new node registered with the same name")

@@ -176,6 +176,9 @@ class Node:
         self._log_marks: Dict[Any, float] = {}
         #: Simulated time its main code owes for rospy calls made without waiting, in ns.
         self.compute_debt_ns = 0
+        #: Whether it has main code of its own (False for a node that lives in callbacks,
+        #: such as a driver): only main code is charged for never waiting.
+        self.has_main_code = True
 
     def __repr__(self) -> str:
         return f"<Node {self.name}{' (shut down)' if self.is_shutdown else ''}>"

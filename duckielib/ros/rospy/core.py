@@ -43,7 +43,7 @@ def _spend(node: Node) -> None:
     Callbacks, and code that runs while the graph delivers events in this thread, are not
     charged: only code that could otherwise hold the clock still for ever.
     """
-    if node.is_shutdown or node_stack():
+    if not node.has_main_code or node.is_shutdown or node_stack():
         return
     if calling_actor() is None and node.graph.driving_here():
         return
