@@ -13,7 +13,10 @@ decides what runs when. It does so deterministically, on a simulated clock:
   greenlet (a thread when the ``greenlet`` package is missing), but only while the graph hands
   it the baton; callbacks (subscribers, timers) run in the thread that drives the graph, with
   their node as the current one. A greenlet takes the baton in about a microsecond, a thread in
-  tens of them; the nodes cannot tell the difference.
+  tens of them; the nodes cannot tell the difference. A thread a node's code starts is adopted
+  the same way (:meth:`Graph.adopt_thread`): it runs as the node, with the baton.
+- Code that holds the baton for ``stall_limit`` real seconds without waiting is stopped (a
+  watchdog raises in it), since the clock cannot move while it runs.
 
 Whoever calls :meth:`Graph.run` (a notebook cell, a test, the mission runner) drives the graph;
 so does a notebook that calls ``rospy.init_node`` and then ``rospy.sleep``.
@@ -22,10 +25,12 @@ so does a notebook that calls ``rospy.init_node`` and then ``rospy.sleep``.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import heapq
 import itertools
 import sys
 import threading
+import time
 from typing import Any, Callable, Dict, List, Optional, TextIO, Tuple
 
 from duckielib.errors import DuckielibError
@@ -63,6 +68,62 @@ class NodeCrashed(DuckielibError):
     def __init__(self, message: str, node: str = "") -> None:
         super().__init__(message)
         self.node = node
+
+
+class _Stalled(BaseException):
+    """Raised in a node's code that held the baton too long.
+
+    Not an ``Exception``, so that ``except Exception`` in the node's loop does not swallow it.
+    """
+
+
+class _Watchdog:
+    """Stops a node's code that runs for too long on the wall clock without ever waiting.
+
+    Simulated time moves only while every node waits, so a loop that waits for something
+    without calling rospy (``while not self.got_message: pass``) would freeze the graph for
+    ever, silently. The watchdog, a daemon thread, checks twice a second which node holds
+    the baton; after ``graph.stall_limit`` real seconds it says so in the node's log and
+    raises an exception in the node's code, which stops the node with a sentence saying why.
+    """
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        #: graph -> (actor, the thread its code runs in, when it took the baton, warned)
+        self.holding: Dict[Any, List[Any]] = {}
+        self.thread: Optional[threading.Thread] = None
+
+    def hold(self, graph: Graph, actor: _Actor, thread_id: int) -> None:
+        with self.lock:
+            self.holding[graph] = [actor, thread_id, time.monotonic(), False]
+            if self.thread is None:
+                self.thread = threading.Thread(target=self._watch, name="graph-watchdog")
+                self.thread.daemon = True
+                self.thread.start()
+
+    def release(self, graph: Graph) -> None:
+        with self.lock:
+            self.holding.pop(graph, None)
+
+    def _watch(self) -> None:
+        while True:
+            time.sleep(0.25)  # the wall clock: this thread runs no node code
+            now = time.monotonic()
+            with self.lock:
+                for graph, held in list(self.holding.items()):
+                    actor, thread_id, since, warned = held
+                    if now - since < graph.stall_limit:
+                        continue
+                    if not warned:
+                        held[3] = True
+                        graph.log_message(ERROR, actor.name, graph.stall_message(actor))
+                    held[2] = now  # raise again later if the code swallows it
+                    ctypes.pythonapi.PyThreadState_SetAsyncExc(
+                        ctypes.c_ulong(thread_id), ctypes.py_object(_Stalled)
+                    )
+
+
+_watchdog = _Watchdog()
 
 
 class _Event:
@@ -160,14 +221,18 @@ class _Actor:
     def _run(self) -> None:
         try:
             self.target(*self.args, **self.kwargs)
+            self._wait_for_threads()
         except ROSInterruptException:
             pass  # shutdown during a sleep ends a node normally
         except KeyboardInterrupt as error:  # Ctrl-C while the node's code ran: the driver raises it
             self.interrupt = error
+        except _Stalled:  # the watchdog logged why
+            self.error = ROSException(self.graph.stall_message(self))
         except BaseException as error:
             self.error = error
             self.graph.log_message(ERROR, self.name, format_error(error))
         finally:
+            _watchdog.release(self.graph)
             self.finished = True
             _parked.discard(self.greenlet)
             if self.node is not None and not self.node.is_shutdown:
@@ -177,6 +242,68 @@ class _Actor:
                     self.node.shutdown(reason)
                 finally:
                     self.stack.pop()
+
+    def _wait_for_threads(self) -> None:
+        """Keep the node alive while threads its code started (not daemons) still run.
+
+        On a robot a node's process lives until its last non-daemon thread ends, even when its
+        main code has returned.
+        """
+        node = self.node
+        if node is not None and not node.is_shutdown:
+            graph = self.graph
+            graph.block(None, lambda: node.is_shutdown or not graph.threads_keeping(node))
+
+
+class _ThreadActor(_Actor):
+    """A thread that a node's code started: it runs, as the node, only with the baton.
+
+    Its node is the one whose code started it (or that node once its code calls
+    ``init_node``); it ends without shutting the node down. An exception it raises is logged
+    as the node's error, as rospy prints it, and the node goes on.
+    """
+
+    def __init__(
+        self,
+        graph: Graph,
+        thread: threading.Thread,
+        run: Callable[[], Any],
+        node: Optional[Node],
+        parent: Optional[_Actor],
+        keeps_node: bool,
+    ) -> None:
+        _Actor.__init__(self, graph, run, (), {}, {"name": thread.name}, threads=False)
+        self.thread = thread
+        self.parent = parent
+        self.keeps_node = keeps_node
+        self.node = node
+
+    @property
+    def node(self) -> Optional[Node]:
+        if self._node is None and self.parent is not None:
+            return self.parent.node
+        return self._node
+
+    @node.setter
+    def node(self, node: Optional[Node]) -> None:
+        self._node = node
+
+    def _run(self) -> None:
+        try:
+            self.target()
+        except ROSInterruptException:
+            pass
+        except KeyboardInterrupt as error:
+            self.interrupt = error
+        except _Stalled:
+            pass  # the watchdog logged why
+        except BaseException as error:
+            self.graph.log_message(
+                ERROR, self.name, f"thread {self.label} stopped:\n{format_error(error)}"
+            )
+        finally:
+            _watchdog.release(self.graph)
+            self.finished = True
 
 
 class Graph(ParameterServer):
@@ -190,6 +317,9 @@ class Graph(ParameterServer):
         threads: run launched nodes in threads even where the ``greenlet`` package is installed
             (greenlets are used when it is). A graph whose nodes run as greenlets must be
             driven from one thread, the first that drove it.
+        stall_limit: how many real seconds a node's code may run without waiting (calling
+            rospy) before the graph stops it with an error: while a node's code runs,
+            simulated time cannot move.
 
     Creating a graph makes it the default one, the graph a notebook's own node joins when it
     calls ``rospy.init_node``.
@@ -202,8 +332,10 @@ class Graph(ParameterServer):
         stderr: Optional[TextIO] = None,
         echo_logs: bool = True,
         threads: bool = False,
+        stall_limit: float = 10.0,
     ) -> None:
         self.threads = threads or _greenlet is None
+        self.stall_limit = stall_limit
         self._now_ns = round(start_time * NS_PER_S)
         self._events: List[Tuple[int, int, _Event]] = []
         self._sequence = itertools.count()
@@ -370,6 +502,53 @@ class Graph(ParameterServer):
             actor.thread.start()
         self.call_soon(lambda: self._resume(actor))
 
+    def adopt_thread(
+        self,
+        thread: threading.Thread,
+        run: Callable[[], Any],
+        node: Optional[Node],
+        keeps_node: bool,
+    ) -> Callable[[], None]:
+        """Run ``thread``, which the calling node's code is starting, on the graph's baton.
+
+        Real rospy runs a node's threads beside its main code; here the thread runs, as the
+        node, whenever the graph hands it the baton (from now, at the current simulated time,
+        until it waits), so rospy's calls work in it and the run stays deterministic.
+
+        Args:
+            thread: the thread, not started yet; the caller makes it a daemon (the graph ends
+                it), since ``keeps_node`` says what its daemon flag meant.
+            run: what the thread runs.
+            node: the node whose code starts it (None: the calling node's, once it has one).
+            keeps_node: whether the node lives on until the thread ends (not a daemon).
+
+        Returns:
+            What the thread must run instead of ``run``.
+        """
+        actor = _ThreadActor(self, thread, run, node, self.current_actor(), keeps_node)
+        self._actors.append(actor)
+        self.call_soon(lambda: self._resume(actor))
+        return actor._main
+
+    def threads_keeping(self, node: Node) -> List[threading.Thread]:
+        """The threads started by ``node``'s code that keep it alive and still run."""
+        return [
+            actor.thread
+            for actor in self._actors
+            if actor.thread is not None
+            if isinstance(actor, _ThreadActor)
+            and actor.keeps_node
+            and not actor.finished
+            and actor.node is node
+        ]
+
+    def thread_actor(self, thread: threading.Thread) -> Optional[_Actor]:
+        """The actor running ``thread``, if the graph adopted it."""
+        for actor in self._actors:
+            if isinstance(actor, _ThreadActor) and actor.thread is thread:
+                return actor
+        return None
+
     def _resume(self, actor: _Actor) -> None:
         """Hand the baton to ``actor`` and wait until it blocks or finishes."""
         if actor.finished:
@@ -379,8 +558,10 @@ class Graph(ParameterServer):
             if actor.resumes_after_shutdown > _SHUTDOWN_PATIENCE:
                 return
         if actor.thread is None:
+            _watchdog.hold(self, actor, threading.get_ident())
             self._switch_to(actor)
         else:
+            _watchdog.hold(self, actor, actor.thread.ident or 0)
             self._hand_over(actor)
         if actor.finished and actor.error is not None and self._crash is None:
             self._crash = (actor.name, actor.error)
@@ -483,6 +664,7 @@ class Graph(ParameterServer):
         if deadline_ns is not None:
             token = actor.token
             self.schedule(deadline_ns, lambda: self._wake(actor, token))
+        _watchdog.release(self)  # in the node's code, so a late stop still lands there
         if actor.thread is None:
             actor.greenlet.parent.switch()
         else:
@@ -490,6 +672,15 @@ class Graph(ParameterServer):
             actor.wake.wait()
         actor.predicate = None
         return predicate()
+
+    def stall_message(self, actor: _Actor) -> str:
+        """Why the graph stopped ``actor``'s code: it ran too long without waiting."""
+        return (
+            f"the code of node {actor.name} ran for {self.stall_limit:g} s of real time "
+            "without calling rospy, and simulated time cannot move while a node's code runs: "
+            "a loop that waits for a callback or another thread never sees it happen. Wait "
+            "inside the loop with rospy.sleep() or rate.sleep() (rospy.Rate)."
+        )
 
     def driving_here(self) -> bool:
         """Whether the calling thread is running the graph's events (and their callbacks)."""

@@ -165,3 +165,28 @@ def test_a_script_runs_as_main_without_taking_the_processs_main(bot):
     bot.run(0.5)
     assert "/listener" in " ".join(bot.graph.nodes), "the script's __main__ block ran"
     assert sys.modules["__main__"] is main, "a process started now must not run the script"
+
+
+def test_a_node_whose_loop_runs_in_a_thread_it_starts(bot):
+    start = bot.sim.pose
+    bot.graph.launch(node_script(NODES / "threaded_patrol.py"))
+    while "/patrol_node" in bot.graph.nodes or bot.time == 0.0:
+        assert bot.time < 20.0, "the node did not finish in 20 s"
+        bot.run(0.1)
+    assert not lines(bot.graph, ERROR)
+    said = {r.text.split(" at ")[0].split(" after ")[0]: r for r in lines(bot.graph)}
+    # The Timer fired after 2 simulated seconds, from its own thread, as the node.
+    assert said["lights on"].time == pytest.approx(2.0)
+    assert said["lights on"].node == "/patrol_node"
+    # The loop drove for 3 s, counted encoder ticks its callback stored, and stopped.
+    stopped = said["stopped"]
+    assert stopped.time == pytest.approx(3.0, abs=0.06)
+    assert int(stopped.text.split()[2]) > 50
+    # rospy.spin() in the main thread returned once the loop's thread shut the node down,
+    # 0.5 s (a time.sleep in the thread) after the stop.
+    assert bot.time == pytest.approx(3.6, abs=0.15)
+    moved = math.hypot(bot.sim.pose[0] - start[0], bot.sim.pose[1] - start[1])
+    assert moved > 0.3
+    assert bot.sim.wheel_duties == (0.0, 0.0)
+    white = (1.0, 1.0, 1.0)
+    assert white in [pattern_colors(pattern)[0] for _, pattern in bot.sim.trace.patterns]

@@ -25,7 +25,9 @@ loop that polls, ``while distance < goal: pub.publish(cmd)``) is charged
 then runs about ten thousand times per simulated second, and the robot, the clock and the
 other nodes go on meanwhile. Callbacks are not charged. ``time.sleep`` in a node's code waits
 simulated seconds, as ``rospy.sleep`` does, and says so once (importing this module makes
-``time.sleep`` do that; anywhere else it is the wall clock's, as always).
+``time.sleep`` do that; anywhere else it is the wall clock's, as always). A thread a node's
+code starts runs as the node, on the graph's baton (:mod:`.threads`), and code that runs 10 s of
+real time without calling rospy is stopped with a sentence (see :class:`~duckielib.ros.Graph`).
 
 The package is split as rospy itself is: :mod:`.client` (nodes, names, parameters),
 :mod:`.topics`, :mod:`.services`, :mod:`.timing` (time, sleeping, rates and timers),
@@ -44,6 +46,7 @@ from duckielib.ros.exceptions import (
     TransportException,
 )
 from duckielib.ros.log import DEBUG, ERROR, FATAL, INFO, WARN
+from duckielib.ros.rospy import threads as _threads  # noqa: F401  (adopts node threads)
 from duckielib.ros.rospy.client import (
     delete_param,
     get_caller_id,
