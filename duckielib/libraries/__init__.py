@@ -17,6 +17,8 @@ in ``duckie mission``:
 - :mod:`~duckielib.libraries.tf`: ROS 1's older ``tf`` (``TransformBroadcaster``,
   ``TransformListener``) on tf2_ros, and ``tf.transformations`` (quaternions, Euler angles,
   matrices).
+- :mod:`~duckielib.libraries.duckietown_utils`: the helpers of Duckietown's library that nodes
+  use most (the robot's name, YAML files, camera messages and JPEG bytes to pixels).
 
 They are served by name only where no real one is installed: :data:`MODULES` says which
 module stands for which name. Importing this package imports none of them (nor OpenCV).
@@ -43,4 +45,5 @@ MODULES: Dict[str, str] = {
     "tf": "duckielib.libraries.tf",
     "tf.transformations": "duckielib.libraries.tf.transformations",
     "tf2_ros": "duckielib.libraries.tf2_ros",
+    "duckietown_utils": "duckielib.libraries.duckietown_utils",
 }

@@ -35,6 +35,7 @@ FOREIGN_IMPORTS = (
     "cv_bridge",
     "duckietown",
     "duckietown_msgs",
+    "duckietown_utils",
     "message_filters",
     "rosbag",
     "rospy",

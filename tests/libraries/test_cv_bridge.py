@@ -197,6 +197,7 @@ def test_importing_the_package_imports_neither_cv2_nor_the_modules():
     assert result.stdout.split() == [
         "['cv_bridge',",
         "'cv_bridge.core',",
+        "'duckietown_utils',",
         "'message_filters',",
         "'rosbag',",
         "'rosbag.bag',",

@@ -3,11 +3,11 @@
 # A node written the way many Duckietown and student nodes are (our own code in their
 # pattern): the control loop runs in a thread the node starts, beside rospy.spin() in the main
 # thread; a threading.Timer blinks the LEDs; a callback flips a flag the loop reads; the
-# shutdown hook joins the loop's thread.
-import os
+# shutdown hook joins the loop's thread; the robot's name comes from duckietown_utils.
 import threading
 import time
 
+import duckietown_utils as dtu
 import rospy
 from duckietown.dtros import DTROS, NodeType
 from duckietown_msgs.msg import LEDPattern, WheelEncoderStamped, WheelsCmdStamped
@@ -17,7 +17,7 @@ from std_msgs.msg import ColorRGBA
 class PatrolNode(DTROS):
     def __init__(self, node_name):
         super().__init__(node_name=node_name, node_type=NodeType.CONTROL)
-        veh = os.environ["VEHICLE_NAME"]
+        veh = dtu.get_current_robot_name()
         self.pub = rospy.Publisher(
             f"/{veh}/wheels_driver_node/wheels_cmd", WheelsCmdStamped, queue_size=1
         )
