@@ -17,7 +17,7 @@ import contextlib
 import threading
 from typing import Any, Callable, Iterator, List, Optional
 
-from duckielib.ros.exceptions import ROSInitException
+from duckielib.ros.exceptions import ROSException, ROSInitException
 
 __all__ = [
     "acting_as",
@@ -29,6 +29,7 @@ __all__ = [
     "make_latest",
     "node_context",
     "node_stack",
+    "refuse_library_thread",
 ]
 
 _local = threading.local()
@@ -129,4 +130,23 @@ def current_node(required_by: str = "this call") -> Any:
         node = graph.foreground_node()
         if node is not None:
             return node
+    refuse_library_thread()
     raise ROSInitException(f"{required_by} needs a node: call rospy.init_node('name') first.")
+
+
+def refuse_library_thread() -> None:
+    """Refuse rospy to a thread a library started from a node's code (a pool's worker).
+
+    Such a thread runs beside the graph, not on its baton, so it cannot use the graph.
+
+    Raises:
+        ROSException: in such a thread, saying what to start instead.
+    """
+    started_by = getattr(threading.current_thread(), "duckie_started_by", None)
+    if started_by is not None:
+        raise ROSException(
+            f"rospy was called from a thread that a library started for node {started_by} "
+            "(a thread pool's worker, for example). On the virtual Duckiebot only the threads "
+            "a node starts itself, threading.Thread(target=your_function), run as the node "
+            "and can call rospy: start one of those for this work."
+        )

@@ -197,6 +197,31 @@ def test_threads_of_libraries_are_left_alone():
     graph.shutdown()
 
 
+def test_rospy_in_a_thread_pools_worker_says_what_to_start_instead():
+    graph = quiet_graph()
+    outcomes = []
+
+    def main():
+        rospy.init_node("pooled")
+        pub = rospy.Publisher("chatter", String, queue_size=1)
+        with concurrent.futures.ThreadPoolExecutor(max_workers=1) as pool:
+            for call in (rospy.get_time, lambda: pub.publish(String(data="x"))):
+                try:
+                    pool.submit(call).result()
+                except rospy.ROSException as error:
+                    outcomes.append(str(error))
+
+    graph.launch(main)
+    graph.run(1.0)
+    assert len(outcomes) == 2
+    for outcome in outcomes:
+        assert outcome.startswith(
+            "rospy was called from a thread that a library started for node /pooled"
+        )
+        assert "threading.Thread(target=your_function)" in outcome
+    graph.shutdown()
+
+
 def test_a_loop_that_never_waits_is_stopped_with_a_sentence():
     graph = quiet_graph(stall_limit=0.5)
 

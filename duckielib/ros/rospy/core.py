@@ -16,6 +16,7 @@ from duckielib.ros.context import (
     calling_actor,
     current_node,
     node_stack,
+    refuse_library_thread,
     waiting_for_init,
 )
 from duckielib.ros.exceptions import (
@@ -45,8 +46,10 @@ def _spend(node: Node) -> None:
     """
     if not node.has_main_code or node.is_shutdown or node_stack():
         return
-    if calling_actor() is None and node.graph.driving_here():
-        return
+    if calling_actor() is None:
+        if node.graph.driving_here():
+            return
+        refuse_library_thread()
     node.compute_debt_ns += CALL_COST_NS
     if node.compute_debt_ns >= _MAX_DEBT_NS:
         owed = node.compute_debt_ns

@@ -115,6 +115,9 @@ def _start(thread: threading.Thread) -> None:
             thread.run = graph.adopt_thread(thread, run, node, keeps_node)  # type: ignore
             thread._duckie_graph = graph  # type: ignore[attr-defined]
             thread.join = functools.partial(_join, thread)  # type: ignore[method-assign]
+        else:  # a library's thread runs free, and is told so if it calls rospy
+            who = node.name if node is not None else getattr(calling_actor(), "name", "?")
+            thread.duckie_started_by = who  # type: ignore[attr-defined]
     _ORIGINAL_START(thread)
 
 
