@@ -12,6 +12,11 @@ Modules (one idea each):
     analysis: topics as arrays, odometry replayed from encoder ticks, pose tracks.
     samples: :func:`sample_bag`, bags that come with the course.
 
+A damaged bag is never read in part as if it were whole: reading checks every record and
+the index's counts, and raises a :class:`~duckielib.errors.BagError` saying where the damage
+is and how many messages it costs; :func:`repair_bag` (``duckie bag repair``) recovers every
+message that can still be read.
+
 Example::
 
     from duckielib.bags import Bag, read_topic, replay_odometry
@@ -19,8 +24,13 @@ Example::
     bag = Bag("run.bag")
     bag.topics                            # names, types, counts
     ticks = read_topic(bag, "/duckiebot/left_wheel_encoder_node/tick")
-    track = replay_odometry(bag, delta_phi, estimate_pose)   # your own odometry functions
+    ticks["data"], ticks.t                # any type's fields as arrays, times in seconds
+    track = replay_odometry(bag, globals())   # in a notebook: its WheelPairing, delta_phi, ...
     track.final_pose
+
+Outside a notebook, pass the solution as a module:
+``replay_odometry(bag, load_solution("my_solution.py"))`` (:func:`~duckielib.solution.load_solution`
+loads what ``duckie export`` wrote).
 """
 
 from __future__ import annotations

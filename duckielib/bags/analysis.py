@@ -1,5 +1,11 @@
 """Analysing bags: topics as arrays, wheel odometry replayed from encoder ticks, final poses.
 
+Any type. :func:`read_topic` reads a topic of any type to arrays of its fields, from the
+message definition the bag holds (``sensor_msgs/Imu``, ``std_msgs/Float64``, a robot's own
+types); the rules for nested fields, fixed-length arrays and strings are in its docstring.
+Encoder ticks are read fast, straight from their bytes, once their md5 sum shows they are
+Duckietown's ``WheelEncoderStamped``.
+
 Time bases. Every message in a bag has two times: its record time (when the recorder got it)
 and, for stamped types, its header stamp (when the data was taken, by the publisher's clock).
 On a real robot they differ by clock skew, and some bags have all stamps 0. Each function here
@@ -15,15 +21,18 @@ recorded on a robot.
 from __future__ import annotations
 
 import math
+import operator
 import struct
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from duckielib.bags.io import Bag, PathLike
+from duckielib import messages as course_messages
+from duckielib.bags.io import Bag, BagMessage, PathLike, TopicInfo
 from duckielib.config import DB21
-from duckielib.errors import BagError
+from duckielib.errors import BagError, MessageDefinitionError, UnknownTypeError
+from duckielib.messages.spec import PRIMITIVE_TYPES, MessageSpec, parse_message
 from duckielib.missions import TASK_START
 from duckielib.odometry import Odometry
 from duckielib.rostime import NS_PER_S
@@ -98,8 +107,12 @@ class TopicArrays:
         time_base: ``"header"`` or ``"record"``: which times ``t`` holds.
         record_t: record times, in seconds, shape (N,).
         stamp_t: header stamps, in seconds, shape (N,), or None for types without a header.
-        fields: every numeric field, by dotted name (``"x"``, ``"header.seq"``), shape (N,).
+        fields: every numeric field, by dotted name (``"x"``, ``"header.seq"``,
+            ``"linear.x"``), shape (N,); times and durations in seconds (float). See
+            :func:`read_topic` for arrays.
         notes: what a careful reader should know about the times.
+        skipped: the fields left out of ``fields`` (strings and variable-length arrays), by
+            dotted name, with their ROS type (``"string"``, ``"uint8[]"``).
     """
 
     topic: str
@@ -110,6 +123,7 @@ class TopicArrays:
     stamp_t: Optional[np.ndarray]
     fields: Dict[str, np.ndarray] = field(default_factory=dict)
     notes: List[str] = field(default_factory=list)
+    skipped: Dict[str, str] = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.t)
@@ -118,28 +132,154 @@ class TopicArrays:
         try:
             return self.fields[name]
         except KeyError:
+            if name in self.skipped:
+                raise KeyError(
+                    f"{self.topic}'s field {name!r} is a {self.skipped[name]}, which read_topic "
+                    "leaves out of its arrays; read the messages themselves with "
+                    "Bag(path).read(topic)."
+                ) from None
             known = ", ".join(self.fields) or "none"
             raise KeyError(
                 f"{self.topic} has no numeric field {name!r}; it has: {known}."
             ) from None
 
 
-def _numeric_leaves(message: Any, prefix: str = "") -> Dict[str, float]:
-    leaves: Dict[str, float] = {}
-    for name in getattr(message, "__slots__", ()):
-        value = getattr(message, name)
-        key = prefix + name
-        if isinstance(value, (bool, int, float)):
-            leaves[key] = value
-        elif hasattr(value, "to_nsec"):
-            leaves[key] = value.to_nsec() / NS_PER_S
-        elif hasattr(value, "__slots__"):
-            leaves.update(_numeric_leaves(value, key + "."))
-    return leaves
+#: Primitive types read as numbers (``byte`` and ``char`` are ROS 1's old names for int8, uint8).
+_NUMBER_TYPES = PRIMITIVE_TYPES - {"string", "time", "duration"}
+_TIME_TYPES = ("time", "duration")
+
+
+@dataclass(frozen=True)
+class _Leaf:
+    """A field that becomes one array: its dotted name, how to get it, and whether a time."""
+
+    name: str
+    get: Callable[[Any], Any]
+    is_time: bool
+
+
+def _definitions(info: TopicInfo) -> Dict[str, MessageSpec]:
+    """Every type a topic's full definition defines, by name: the topic's type and its parts.
+
+    Raises:
+        BagError: if the bag holds no definition, or one that cannot be read.
+    """
+    text = info.message_definition
+    if not text.strip():
+        try:
+            cls = course_messages.get_message_class(info.type)
+        except UnknownTypeError:
+            cls = None
+        if cls is None or cls._md5sum != info.md5sum:
+            raise BagError(
+                f"{info.name} ({info.type}) was recorded without its message definition, so "
+                "its fields cannot be known."
+            )
+        text = cls._full_text
+    sections: List[Tuple[str, List[str]]] = [(info.type, [])]
+    lines = text.split("\n")
+    index = 0
+    while index < len(lines):
+        line = lines[index]
+        if len(line) >= 3 and set(line.strip()) == {"="}:
+            name = lines[index + 1].strip() if index + 1 < len(lines) else ""
+            name = name[len("MSG:") :].strip() if name.startswith("MSG:") else name
+            sections.append(("std_msgs/Header" if name == "Header" else name, []))
+            index += 2
+            continue
+        sections[-1][1].append(line)
+        index += 1
+    try:
+        return {name: parse_message("\n".join(body), name) for name, body in sections}
+    except MessageDefinitionError as error:
+        raise BagError(
+            f"The definition of {info.type} recorded for {info.name} cannot be read: {error}"
+        ) from None
+
+
+def _getter(path: Tuple[Union[str, int], ...]) -> Callable[[Any], Any]:
+    """A function getting a field from a message: attribute names, and indices in arrays."""
+    if all(isinstance(step, str) for step in path):
+        return operator.attrgetter(".".join(str(step) for step in path))
+
+    def get(message: Any) -> Any:
+        value = message
+        for step in path:
+            value = value[step] if isinstance(step, int) else getattr(value, step)
+        return value
+
+    return get
+
+
+def _plan(
+    specs: Dict[str, MessageSpec],
+    type_name: str,
+    prefix: str = "",
+    path: Tuple[Union[str, int], ...] = (),
+) -> Tuple[List[_Leaf], Dict[str, str]]:
+    """The fields of a type that become arrays, and those left out, with their ROS types."""
+    spec = specs.get(type_name)
+    if spec is None:
+        raise BagError(
+            f"The message definition recorded for {prefix.rstrip('.') or 'a topic'} lacks the "
+            f"definition of {type_name}, so the bag cannot be read as arrays."
+        )
+    leaves: List[_Leaf] = []
+    skipped: Dict[str, str] = {}
+    for item in spec.fields:
+        name = prefix + item.name
+        if item.base_type == "string" or (item.is_array and item.array_length is None):
+            skipped[name] = item.type
+            continue
+        if item.is_array:
+            length = item.array_length or 0
+            elements = [(f"{name}.{i}", (*path, item.name, i)) for i in range(length)]
+        else:
+            elements = [(name, (*path, item.name))]
+        for element, steps in elements:
+            if item.base_type in _NUMBER_TYPES:
+                leaves.append(_Leaf(element, _getter(steps), False))
+            elif item.base_type in _TIME_TYPES:
+                leaves.append(_Leaf(element, _getter(steps), True))
+            else:
+                more, left_out = _plan(specs, item.base_type, element + ".", steps)
+                leaves += more
+                skipped.update(left_out)
+    return leaves, skipped
+
+
+def _time_ns(value: Any) -> int:
+    """A time or duration in integer nanoseconds: duckielib's (secs, nsecs) or rosbags'."""
+    to_nsec = getattr(value, "to_nsec", None)
+    if to_nsec is not None:
+        return int(to_nsec())
+    return int(value.sec) * NS_PER_S + int(value.nanosec)
+
+
+def _column(leaf: _Leaf, messages: List[BagMessage]) -> np.ndarray:
+    get = leaf.get
+    if leaf.is_time:
+        return np.array([_time_ns(get(item.message)) for item in messages], np.int64) / NS_PER_S
+    if not messages:
+        return np.array([], dtype=np.float64)
+    return np.array([get(item.message) for item in messages])
 
 
 def read_topic(bag: Union[Bag, PathLike], topic: str, time_base: str = "auto") -> TopicArrays:
-    """Read one topic of a bag into arrays.
+    """Read one topic of a bag into arrays, one entry per message, whatever its type.
+
+    The fields come from the message definition the bag holds, so types the course does not
+    know read as well (``sensor_msgs/Imu``, ``std_msgs/Float64``, a robot's own types):
+
+    - numbers (and ``bool``) become arrays, named by their path: ``data``, ``linear.x``,
+      ``header.seq``, ``orientation.w``;
+    - times and durations become float seconds: ``header.stamp``;
+    - a fixed-length array becomes one array per element, named by its index:
+      ``orientation_covariance.0`` to ``orientation_covariance.8`` (messages in it too:
+      ``points.0.x``);
+    - strings and variable-length arrays (``string``, ``uint8[]``, ``Point[]``) are left out:
+      their names and types are in ``skipped``. Read them from the messages themselves, with
+      ``Bag(path).read(topic)``.
 
     Args:
         bag: a :class:`~duckielib.bags.Bag` or a bag's path.
@@ -147,23 +287,27 @@ def read_topic(bag: Union[Bag, PathLike], topic: str, time_base: str = "auto") -
         time_base: ``"auto"`` (header stamps unless all 0), ``"header"`` or ``"record"``.
 
     Raises:
-        BagError: if the bag or topic is missing, or the time base cannot be used.
+        BagError: if the bag or topic is missing, the bag is damaged, the topic was recorded
+            with two definitions of its type, or the time base cannot be used.
     """
     _check_time_base(time_base)
     bag = _open(bag)
     info = bag.topic(topic)
-    records = bag.read(topic)
-    record_ns = np.array([item.time_ns for item in records], dtype=np.int64)
-    has_header = bool(records) and hasattr(records[0].message, "header")
-    stamp_ns = None
-    if has_header:
-        stamp_ns = np.array(
-            [item.message.header.stamp.to_nsec() for item in records], dtype=np.int64
+    sums = sorted({item.md5sum for item in bag.connections_of(topic)})
+    if len(sums) > 1:
+        raise BagError(
+            f"{topic} in {bag.path.name} was recorded with {len(sums)} definitions of "
+            f"{info.type} (md5 sums {', '.join(sums)}), so its messages have no common fields; "
+            "read them one by one with Bag(path).read(topic)."
         )
+    leaves, skipped = _plan(_definitions(info), info.type)
+    messages = bag.read(topic)
+    record_ns = np.array([item.time_ns for item in messages], dtype=np.int64)
+    stamp = next((leaf for leaf in leaves if leaf.name == "header.stamp" and leaf.is_time), None)
+    stamp_ns = None
+    if stamp is not None:
+        stamp_ns = np.array([_time_ns(stamp.get(item.message)) for item in messages], np.int64)
     times, base, notes = _choose_times(topic, record_ns, stamp_ns, time_base)
-    rows = [_numeric_leaves(item.message) for item in records]
-    names = list(rows[0]) if rows else []
-    fields = {name: np.array([row[name] for row in rows]) for name in names}
     return TopicArrays(
         topic=topic,
         type=info.type,
@@ -171,8 +315,9 @@ def read_topic(bag: Union[Bag, PathLike], topic: str, time_base: str = "auto") -
         time_base=base,
         record_t=record_ns / NS_PER_S,
         stamp_t=None if stamp_ns is None else stamp_ns / NS_PER_S,
-        fields=fields,
+        fields={leaf.name: _column(leaf, messages) for leaf in leaves},
         notes=notes,
+        skipped=skipped,
     )
 
 
@@ -218,6 +363,26 @@ def encoder_topics(bag: Bag) -> Tuple[str, str]:
     return pair[0], pair[1]
 
 
+def _check_encoder_topic(bag: Bag, topic: str) -> None:
+    """Check that every connection of ``topic`` carries the course's WheelEncoderStamped.
+
+    Raises:
+        BagError: if it carries another type, or another definition of it (md5 sum).
+    """
+    course_md5 = course_messages.get_message_class(_ENCODER_TYPE)._md5sum
+    for info in bag.connections_of(topic):
+        if info.type != _ENCODER_TYPE:
+            raise BagError(f"{topic} carries {info.type}, not {_ENCODER_TYPE}.")
+        if info.md5sum != course_md5:
+            raise BagError(
+                f"{topic} in {bag.path.name} carries {_ENCODER_TYPE} with md5 sum "
+                f"{info.md5sum}, but Duckietown's (and the course's) {_ENCODER_TYPE} has md5 "
+                f"sum {course_md5}: whoever recorded the bag defined the message differently, "
+                "so its bytes are not the encoder ticks (data, resolution, type) odometry "
+                f"needs. See what its messages hold with read_topic(bag, {topic!r})."
+            )
+
+
 def _decode_encoders(raw: Sequence[Tuple[str, int, bytes]]) -> Tuple[np.ndarray, ...]:
     """Record times, stamps, ticks and resolutions of WheelEncoderStamped bytes, fast."""
     count = len(raw)
@@ -252,7 +417,8 @@ def read_encoders(
         time_base: ``"auto"``, ``"header"`` or ``"record"``; both wheels use the same base.
 
     Raises:
-        BagError: if a topic is missing or not of type WheelEncoderStamped.
+        BagError: if a topic is missing, is not of type WheelEncoderStamped or has another
+            definition of it (md5 sum) than Duckietown's, or if the bag is damaged.
     """
     _check_time_base(time_base)
     bag = _open(bag)
@@ -261,13 +427,20 @@ def read_encoders(
         left_topic = left_topic or found_left
         right_topic = right_topic or found_right
     for topic in (left_topic, right_topic):
-        if bag.topic(topic).type != _ENCODER_TYPE:
-            raise BagError(f"{topic} carries {bag.topic(topic).type}, not {_ENCODER_TYPE}.")
+        _check_encoder_topic(bag, topic)
     raw = bag.raw_messages([left_topic, right_topic])
     by_topic = {
         topic: [item for item in raw if item[0] == topic] for topic in (left_topic, right_topic)
     }
-    decoded = {topic: _decode_encoders(items) for topic, items in by_topic.items()}
+    decoded = {}
+    for topic, items in by_topic.items():
+        try:
+            decoded[topic] = _decode_encoders(items)
+        except struct.error:
+            raise BagError(
+                f"A message on {topic} in {bag.path.name} is too short to be a "
+                f"{_ENCODER_TYPE}: the bag is damaged."
+            ) from None
     # One base for both wheels: header stamps only if both have them.
     base = time_base
     if time_base == "auto" and any(not decoded[t][1].any() for t in decoded if len(decoded[t][1])):
@@ -334,6 +507,34 @@ def pose_tracks(bag: Union[Bag, PathLike], time_base: str = "auto") -> List[Pose
     return tracks
 
 
+def _one_resolution(bag: Bag, left: EncoderStream, right: EncoderStream) -> int:
+    """The encoders' resolution (ticks per wheel revolution), the same in every message.
+
+    Raises:
+        BagError: if a message says 0, or the messages say several resolutions: a problem of
+            the bag, which the solution's odometry must not be blamed for.
+    """
+    for stream in (left, right):
+        zero = int(np.count_nonzero(stream.resolution == 0))
+        if zero:
+            raise BagError(
+                f"{zero} of the {len(stream.resolution)} encoder messages on {stream.topic} in "
+                f"{bag.path.name} carry resolution 0 (ticks per wheel revolution), so no wheel "
+                "angle can be computed from their ticks. This is a problem of the bag (the "
+                "encoder driver that recorded it did not fill in its resolution), not of your "
+                "code: replay a bag whose encoder messages carry their resolution (135 on a "
+                "DB21)."
+            )
+    values = sorted({int(value) for value in np.concatenate([left.resolution, right.resolution])})
+    if len(values) > 1:
+        raise BagError(
+            f"The encoder messages of {bag.path.name} carry {len(values)} resolutions "
+            f"({', '.join(map(str, values))} ticks per wheel revolution), but both wheels' "
+            "odometry needs one. This is a problem of the bag, not of your code."
+        )
+    return values[0]
+
+
 def replay_odometry(
     bag: Union[Bag, PathLike],
     solution: Any,
@@ -366,14 +567,17 @@ def replay_odometry(
         The poses: one per pair of readings, the first at ``start``.
 
     Raises:
-        BagError: if the bag has no encoder topics, or one wheel has no message.
+        BagError: if the bag has no encoder topics, one wheel has no message, or the encoder
+            messages do not say one resolution (ticks per revolution) above 0.
         SolutionError: if the solution lacks a part, has not finished it, or a part fails.
     """
+    bag = _open(bag)
     left, right = read_encoders(bag, left_topic, right_topic, time_base)
     for stream in (left, right):
         if not len(stream.t):
             raise BagError(f"{stream.topic} has no message, so no odometry can be computed.")
-    odometry = Odometry(solution, int(left.resolution[0]), radius, baseline, start)
+    resolution = _one_resolution(bag, left, right)
+    odometry = Odometry(solution, resolution, radius, baseline, start)
     times_all = np.concatenate([left.t, right.t])
     wheels = np.concatenate([np.zeros(len(left.t), np.int64), np.ones(len(right.t), np.int64)])
     order = np.lexsort((wheels, times_all))  # by time, the left wheel first at equal times

@@ -3,7 +3,10 @@
 - :class:`Bag` opens a bag for reading. rosbags checks it and reads its index (topics, types,
   counts, times). Messages are decoded with duckielib's classes when the bag's type has the
   same md5 sum, and otherwise with a rosbags type built from the definition embedded in the
-  bag, so a bag recorded on any Duckiebot reads without registering anything.
+  bag, so a bag recorded on any Duckiebot reads without registering anything. Messages are
+  read in file order (:mod:`duckielib.bags.records`), every record checked and the count of
+  each topic compared with the index: a damaged bag raises a sentence saying where, never
+  gives part of its messages as if they were all.
 - :class:`BagWriter` writes a bag with rosbags, uncompressed or BZ2 (rosbags' LZ4 chunks are
   rejected by ROS 1's own tools, so they are refused here), and always finishes the bag
   (chunks, index) when closed, also when the code writing it fails.
@@ -13,7 +16,8 @@
   write fast and to find the chunks), checked against the installed rosbags at first use.
 
 Times at this edge are integer nanoseconds (``time_ns``); a bag's record time is when the
-recorder received the message, which is not the message's header stamp.
+recorder received the message, which is not the message's header stamp. A record time of 0 is
+written as 1 ns, ROS 1's smallest valid time, so ``rosbag play`` loads the message.
 """
 
 from __future__ import annotations
@@ -22,12 +26,13 @@ import contextlib
 import io
 import os
 import struct
+import textwrap
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any, BinaryIO, Dict, Iterable, Iterator, List, Optional, Tuple, Union
 
-from rosbags.rosbag1 import Reader, ReaderError, Writer, WriterError
+from rosbags.rosbag1 import Reader, Writer, WriterError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 from duckielib import messages as course_messages
@@ -58,6 +63,13 @@ ROSBAGS_CHECKED = ("0.11.9",)
 
 _UINT32 = struct.Struct("<L")
 _MESSAGE_TAIL = struct.Struct("<LLL")  # record time (secs, nsecs), then the data's length
+
+
+#: ROS 1's smallest valid time (``ros::TIME_MIN``), in ns. Debian's rosbag_storage drops a
+#: message whose record time is below it ("contains invalid time"), so a message recorded at
+#: time 0 (the simulation's first instant) is written 1 ns later: then every bag written here
+#: replays whole in ``rosbag play``.
+_TIME_MIN_NS = 1
 
 
 def rosbags_version() -> str:
@@ -147,12 +159,15 @@ class RosbagsSeam:
         first, last = chunk.start, chunk.end
         written = 0
         try:
-            for connection, time_ns, data in items:
-                if time_ns.__class__ is not int or time_ns < 0:
-                    raise BagError(
-                        "A record time must be a whole number of nanoseconds >= 0, "
-                        f"not {time_ns!r}."
-                    )
+            for connection, record_ns, data in items:
+                time_ns = record_ns
+                if time_ns.__class__ is not int or time_ns < _TIME_MIN_NS:
+                    if time_ns.__class__ is not int or time_ns < 0:
+                        raise BagError(
+                            "A record time must be a whole number of nanoseconds >= 0, "
+                            f"not {time_ns!r}."
+                        )
+                    time_ns = _TIME_MIN_NS  # see _TIME_MIN_NS
                 known, start = starts.get(connection.id, (None, b""))
                 if known is not connection:
                     raise BagError(f"{connection.topic} is not a connection of {self.name}.")
@@ -361,6 +376,10 @@ class BagMessage:
         return self.time_ns / NS_PER_S
 
 
+def _repair_advice(path: Path) -> str:
+    return f"Recover its messages into a new bag with: duckie bag repair {path} FIXED.bag"
+
+
 def _unindexed_advice(path: Path) -> str:
     return (
         f"{path} was not closed properly (its recording was interrupted), so it has no index; "
@@ -368,8 +387,50 @@ def _unindexed_advice(path: Path) -> str:
     )
 
 
+def _unreadable(path: Path, layout: records.ScanResult, error: Exception) -> str:
+    """Why rosbags cannot open a bag, from what a quick look at its layout found."""
+    if not layout.header_ok:
+        return (
+            f"{path} cannot be read: its bag header (the first record, in the file's first "
+            f"4 KB) is damaged, so where its index is cannot be known. {_repair_advice(path)}."
+        )
+    if layout.index_pos == 0:
+        return _unindexed_advice(path)
+    if layout.damages:
+        return (
+            f"{path} cannot be read through its index: the file is damaged "
+            f"({layout.damages[0]}). {_repair_advice(path)}."
+        )
+    if layout.cut is not None or layout.index_pos >= layout.size:
+        return (
+            f"{path} cannot be read: the file was cut short, so its index is missing or "
+            f"incomplete. {_repair_advice(path)}."
+        )
+    reason = str(error).rstrip(".") or type(error).__name__
+    return (
+        f"{path} cannot be read as a ROS 1 bag: {reason}. If the file was damaged, recover "
+        f"its messages into a new bag with: duckie bag repair {path} FIXED.bag"
+    )
+
+
+@dataclass(frozen=True)
+class _Chunk:
+    """Where a chunk is in the file, and how many messages the index says it holds."""
+
+    number: int
+    start: int
+    end: int
+    messages: int
+
+
 class Bag:
     """A ROS 1 bag, opened for reading.
+
+    Opening reads the bag's index (with rosbags) and checks, quickly, that the index lists every
+    chunk of the file. Reading messages checks every record it reads, and that as many messages
+    were read as the index lists: a bag damaged in the middle raises a :class:`BagError` saying
+    where, rather than giving part of its messages (``duckie bag repair`` recovers what can be
+    read). :meth:`check` reads the whole bag this way; :meth:`info` reports what it finds.
 
     Args:
         path: the bag file.
@@ -378,10 +439,13 @@ class Bag:
         path: the bag file.
         topics: every topic, by name (sorted), as :class:`TopicInfo`.
         start_ns, end_ns: the first and last record times, in nanoseconds (0 for an empty bag).
-        message_count: how many messages the bag holds.
+        message_count: how many messages the bag holds, as its index lists them.
+        chunk_count: how many chunks the index lists.
 
     Raises:
-        BagError: if the file is missing, is not a ROS 1 bag, or was never closed (no index).
+        BagError: if the file is missing or is not a ROS 1 bag, if it was never closed (no
+            index), if its header or index is damaged, or if its index leaves out chunks of
+            the file. The message says what to do (usually ``duckie bag repair``).
     """
 
     def __init__(self, path: PathLike) -> None:
@@ -395,16 +459,18 @@ class Bag:
                 raise BagError(
                     f"{self.path} is not a ROS 1 bag: it does not start with '#ROSBAG V2.0'."
                 )
+        layout = records.scan(self.path, read_chunks=False)
         try:
             reader = Reader(self.path)
             reader.open()
-        except ReaderError as error:
-            if "index" in str(error).lower():
-                raise BagError(_unindexed_advice(self.path)) from None
-            raise BagError(f"{self.path} cannot be read as a ROS 1 bag: {error}.") from None
+        except Exception as error:  # rosbags raises more than ReaderError on damaged bytes
+            raise BagError(_unreadable(self.path, layout, error)) from None
         try:
             self._chunk_positions = RosbagsSeam.chunk_positions(reader)
+            self._check_layout(layout)
             topics = {}
+            self._connections: Dict[int, TopicInfo] = {}
+            self._topic_connections: Dict[str, List[int]] = {}
             for name in sorted(reader.topics):
                 info = reader.topics[name]
                 connection = info.connections[0]
@@ -415,6 +481,15 @@ class Bag:
                     md5sum=connection.digest,
                     message_definition=connection.msgdef.data,
                 )
+                self._topic_connections[name] = [item.id for item in info.connections]
+                for item in info.connections:
+                    self._connections[item.id] = TopicInfo(
+                        name=name,
+                        type=ros1_type(item.msgtype),
+                        count=layout.index_counts.get(item.id, 0),
+                        md5sum=item.digest,
+                        message_definition=item.msgdef.data,
+                    )
             self.topics: Dict[str, TopicInfo] = topics
             self.message_count: int = reader.message_count
             self.start_ns: int = reader.start_time if self.message_count else 0
@@ -423,7 +498,24 @@ class Bag:
             self.chunk_count = len(self._chunk_positions)
         finally:
             reader.close()
+        self._chunks = [
+            _Chunk(number, start, end, layout.chunk_messages.get(start, 0))
+            for number, (start, end) in enumerate(layout.chunk_spans, start=1)
+        ]
+        self._layout_damage = layout.damages[0] if layout.damages else None
         self._decoders: Dict[Tuple[str, str], Any] = {}
+
+    def _check_layout(self, layout: records.ScanResult) -> None:
+        """Raise if the index leaves out chunks that the file holds."""
+        listed = set(self._chunk_positions)
+        unlisted = [start for start, _ in layout.chunk_spans if start not in listed]
+        if unlisted:
+            raise BagError(
+                f"{self.path} cannot be read through its index: the index lists "
+                f"{len(listed)} chunks, but the file holds {len(layout.chunk_spans)} (the first "
+                f"one left out starts at byte {unlisted[0]}), so the bag was not closed "
+                f"properly or its index is damaged. {_repair_advice(self.path)}."
+            )
 
     def __repr__(self) -> str:
         return f"<Bag {self.path.name}: {self.message_count} messages on {len(self.topics)} topics>"
@@ -436,13 +528,40 @@ class Bag:
             for position in self._chunk_positions:
                 file.seek(position)
                 length = int.from_bytes(file.read(4), "little")
-                fields = records.parse_fields(file.read(length), 0, length)
+                try:
+                    fields = records.parse_fields(file.read(length), 0, length)
+                except (ValueError, struct.error):
+                    kinds.add("(damaged)")
+                    continue
                 kinds.add(fields.get(b"compression", b"none").decode("ascii", "replace"))
         return "/".join(sorted(kinds)) if kinds else "none"
 
-    def info(self) -> str:
-        """A summary like ``rosbag info``: path, duration, times, size, types and topics."""
+    def check(self) -> Optional[str]:
+        """Read every record of the bag to check it: what is wrong, or None if nothing is.
+
+        This reads the whole file (about as long as reading every message, without decoding
+        them). It finds records that cannot be read, counts that differ from the index, and
+        index records that do not list where the messages are; a byte changed inside a
+        message's data cannot be found (bags carry no checksums).
+
+        Returns:
+            None for a sound bag, else sentences saying where the damage is, how many
+            messages it affects, and how to recover them.
+        """
+        scan = records.scan(self.path, lambda connection: False, check_index=True)
+        counted = self._counted(scan, list(self.topics))
+        if not scan.damages and not any(read != listed for _, read, listed in counted):
+            return None
+        return f"{self._damaged_sentence(scan, counted)} {_repair_advice(self.path)}."
+
+    def info(self, check: bool = True) -> str:
+        """A summary like ``rosbag info``: path, duration, times, size, types and topics.
+
+        Args:
+            check: also read every record (see :meth:`check`) and say what is damaged.
+        """
         size = self.path.stat().st_size
+        problem = self.check() if check else None
         lines = [
             f"path:        {self.path}",
             "version:     2.0",
@@ -463,7 +582,13 @@ class Bag:
             label = "topics:" if index == 0 else ""
             lines.append(f"{label:<13}{info.name:<{width}}  {info.count:>7} msgs    : {info.type}")
         if not self.topics:
-            lines.append("topics:      (none: the bag is empty)")
+            empty = "(none: the bag is empty)" if problem is None else "(none in its index)"
+            lines.append(f"topics:      {empty}")
+        if problem is not None:
+            wrapped = textwrap.wrap(problem, 87)
+            lines += [
+                f"{'damage:' if index == 0 else '':<13}{line}" for index, line in enumerate(wrapped)
+            ]
         return "\n".join(lines)
 
     @property
@@ -483,6 +608,18 @@ class Bag:
             raise BagError(f"{self.path.name} has no topic {name}; its topics are: {known}.")
         return info
 
+    def connections_of(self, name: str) -> List[TopicInfo]:
+        """The topic ``name`` as each of its connections (publishers) recorded it.
+
+        A topic recorded from two publishers has two connections, which may even carry two
+        definitions of its type; ``count`` is then each connection's share of the messages.
+
+        Raises:
+            BagError: if the bag has no such topic.
+        """
+        self.topic(name)
+        return [self._connections[cid] for cid in self._topic_connections[name]]
+
     def topics_of_type(self, message_type: str) -> List[str]:
         """The names of the topics carrying ``message_type`` (``package/Type``)."""
         return [name for name, info in self.topics.items() if info.type == message_type]
@@ -491,27 +628,126 @@ class Bag:
         """``(topic, record time in ns, serialized bytes)`` of the topics' messages, by time.
 
         Raises:
-            BagError: if a topic is not in the bag.
+            BagError: if a topic is not in the bag, or if the bag is damaged: a record
+                cannot be read, or fewer (or more) of the topics' messages were found than
+                the index lists. The message says where, how many messages are affected, and
+                how to recover them; no message is returned.
         """
-        wanted = {self.topic(name).name for name in topics}
-        scan = records.scan(self.path, lambda connection: connection.topic in wanted)
-        topic_of = {cid: connection.topic for cid, connection in scan.connections.items()}
-        found = [(topic_of[cid], time_ns, data) for cid, time_ns, data in scan.messages]
+        return [(self._connections[cid].name, t, data) for cid, t, data in self._raw(topics)]
+
+    def _raw(self, topics: Iterable[str]) -> List[Tuple[int, int, bytes]]:
+        """``(connection id, record time in ns, bytes)`` of the topics' messages, by time."""
+        names = [self.topic(name).name for name in topics]
+        wanted = {cid for name in names for cid in self._topic_connections[name]}
+        scan = records.scan(self.path, lambda connection: connection.id in wanted)
+        counted = self._counted(scan, names)
+        if scan.damages or any(read != listed for _, read, listed in counted):
+            raise BagError(
+                f"{self._damaged_sentence(scan, counted)} Nothing is returned rather than a "
+                f"part. {_repair_advice(self.path)}, and read FIXED.bag instead."
+            )
+        found = scan.messages
         found.sort(key=lambda item: item[1])
         return found
+
+    def _counted(self, scan: records.ScanResult, names: List[str]) -> List[Tuple[str, int, int]]:
+        """``(topic, messages read, messages the index lists)`` of each topic."""
+        counted = []
+        for name in names:
+            ids = self._topic_connections[name]
+            read = sum(scan.counts.get(cid, 0) for cid in ids)
+            listed = sum(self._connections[cid].count for cid in ids)
+            counted.append((name, read, listed))
+        return counted
+
+    def _damaged_sentence(
+        self, scan: records.ScanResult, counted: List[Tuple[str, int, int]]
+    ) -> str:
+        """Where a bag is damaged, and how many messages of which topics it costs."""
+        damage = scan.damages[0] if scan.damages else self._layout_damage
+        if damage is not None:
+            where = f"is damaged {self._where(damage)}"
+            if len(scan.damages) > 1:
+                where += f" ({len(scan.damages)} damaged stretches in all)"
+        elif scan.cut is not None:
+            where = f"was cut short ({scan.cut})"
+        else:
+            where = "has an index that does not match its records"
+        short = [item for item in counted if item[1] != item[2]] or counted
+        read = sum(item[1] for item in short)
+        listed = sum(item[2] for item in short)
+        if len(short) == 1:
+            topics = short[0][0]
+        elif read == listed:
+            topics = f"its {len(short)} topics"
+        else:
+            topics = ", ".join(f"{name}: {got} of {count}" for name, got, count in short)
+            topics = f"its topics ({topics})"
+        if read < listed:
+            counts = (
+                f"only {read} of the {listed} messages its index lists on {topics} could be "
+                f"read; {listed - read} {'is' if listed - read == 1 else 'are'} lost or may be "
+                "damaged"
+            )
+        elif read > listed:
+            counts = (
+                f"{read} messages were found on {topics}, more than the {listed} its index lists"
+            )
+        elif damage is not None and self._chunk_of(damage) is None:
+            counts = (
+                f"the {listed} messages its index lists on {topics} were all found, but "
+                "readers that go by the index (ROS's rosbag, rosbags) cannot read them"
+            )
+        else:
+            counts = (
+                f"the {listed} messages its index lists on {topics} were found, but a message "
+                "next to damage may be damaged too"
+            )
+        return f"{self.path.name} {where}: {counts}."
+
+    def _chunk_of(self, damage: records.Damage) -> Optional[_Chunk]:
+        """The chunk a damage is in, or None if it lies between chunks or after them."""
+        for item in self._chunks:
+            if item.start == damage.chunk or item.start <= damage.start < item.end:
+                return item
+        return None
+
+    def _where(self, damage: records.Damage) -> str:
+        """Where a damage is: its byte offset, its chunk, and what is wrong there."""
+        chunk = self._chunk_of(damage)
+        if chunk is not None:
+            place = (
+                f"in chunk {chunk.number} of {len(self._chunks)} (bytes {chunk.start} to "
+                f"{chunk.end}, which holds {chunk.messages} messages)"
+            )
+        elif not self._chunks or damage.start >= self._chunks[-1].end:
+            place = "after its chunks, among its index records"
+        elif damage.start < self._chunks[0].start:
+            place = "before its first chunk"
+        else:
+            place = "between two of its chunks, among index records"
+        return f"{place}: {damage}"
 
     def messages(self, topics: Optional[Iterable[str]] = None) -> Iterator[BagMessage]:
         """The messages of ``topics`` (default: all), decoded, in record-time order.
 
+        Each message is decoded as its own connection recorded it.
+
         Raises:
-            BagError: if a topic is not in the bag, or a message cannot be decoded.
+            BagError: if a topic is not in the bag, the bag is damaged (see
+                :meth:`raw_messages`), or a message cannot be decoded.
         """
         names = list(self.topics) if topics is None else list(topics)
-        for topic, time_ns, data in self.raw_messages(names):
-            yield BagMessage(topic, time_ns, self._decode(self.topics[topic], data))
+        for cid, time_ns, data in self._raw(names):
+            info = self._connections[cid]
+            yield BagMessage(info.name, time_ns, self._decode(info, data))
 
     def read(self, topic: str) -> List[BagMessage]:
-        """Every message of one topic, decoded, in record-time order."""
+        """Every message of one topic, decoded, in record-time order.
+
+        Raises:
+            BagError: as :meth:`messages` does.
+        """
         return list(self.messages([topic]))
 
     def _decode(self, info: TopicInfo, data: bytes) -> Any:

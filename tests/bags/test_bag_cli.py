@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
-from bagtools import write_encoders
+from bagtools import encoder, write_encoders
 
 from duckielib.bags import BagWriter, sample_bag
 from duckielib.messages import Pose2DStamped, String
@@ -133,3 +134,133 @@ def test_info_into_a_reader_that_stops_early_ends_quietly():
     process.stderr.close()
     assert process.wait(timeout=120) == 141
     assert errors == ""
+
+
+def solution_with(tmp_path, source):
+    """The bag tests' classic solution with ``source`` added (a part redefined)."""
+    path = tmp_path / "mine.py"
+    path.write_text(SOLUTION.read_text() + "\n\n" + source)
+    return path
+
+
+NAN_ONCE_MOVED = """
+def estimate_pose(R, baseline, x_prev, y_prev, theta_prev, delta_phi_left, delta_phi_right):
+    if x_prev > 0.1:
+        return x_prev, y_prev, float("nan")
+    return x_prev + R * (delta_phi_left + delta_phi_right) / 2, y_prev, theta_prev
+"""
+
+
+def test_a_non_finite_pose_is_named_with_the_call_that_returned_it(tmp_path, encoders):
+    solution = solution_with(tmp_path, NAN_ONCE_MOVED)
+    result = duckie("odometry", encoders, "--solution", solution, "--json", "--start", 0, 0, 0)
+    assert_one_line_error(result, "duckie: estimate_pose(0.0318, 0.1, 0.10")
+    assert re.search(
+        r"^duckie: estimate_pose\(0\.0318, 0\.1, 0\.10\d+, 0\.0, 0\.0, 0\.09\d+, 0\.09\d+\), "
+        r"from notebook 05_odometry, returned \(0\.10\d+, 0\.0, nan\): every number it returns "
+        r"must be finite, not NaN or infinite \(",
+        result.stderr,
+    ), result.stderr
+
+
+def test_a_start_that_is_not_a_finite_number_is_refused(encoders):
+    for start in (("nan", 0, 0), (0, "inf", 0)):
+        result = duckie("odometry", encoders, "--start", *start)
+        assert result.returncode == 2
+        bad = next(value for value in start if value != 0)
+        assert result.stderr.splitlines()[-1] == (
+            f"duckie bag odometry: error: argument --start: give a finite number, not '{bad}'"
+        )
+
+
+@pytest.fixture
+def two_robots(tmp_path):
+    """A bag of two robots' encoders: alice drives straight ahead, bob turns on the spot."""
+    path = tmp_path / "two.bag"
+    with BagWriter(path) as writer:
+        for k in range(30):
+            for robot, left, right in (("alice", 2 * k, 2 * k), ("bob", -k, k)):
+                for side, ticks in (("left", left), ("right", right)):
+                    topic = f"/{robot}/{side}_wheel_encoder_node/tick"
+                    writer.write(topic, encoder(ticks, k * S // 30), k * S // 30)
+    return path
+
+
+def test_one_encoder_topic_given_pairs_with_its_twin(two_robots):
+    def final_pose(*topics):
+        result = duckie("odometry", two_robots, "--json", "--start", 0, 0, 0, *topics)
+        assert result.returncode == 0, result.stderr
+        return json.loads(result.stdout)
+
+    bob = final_pose("--left", "/bob/left_wheel_encoder_node/tick")
+    assert bob == final_pose(
+        "--left",
+        "/bob/left_wheel_encoder_node/tick",
+        "--right",
+        "/bob/right_wheel_encoder_node/tick",
+    )
+    assert bob["x"] == pytest.approx(0.0, abs=1e-12)
+    assert bob["theta"] > 0.5, "bob turns counter-clockwise"
+    alice = final_pose("--right", "/alice/right_wheel_encoder_node/tick")
+    assert alice["x"] > 0.0
+    assert alice["theta"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_unclear_or_equal_encoder_topics_are_refused_in_the_options_words(two_robots):
+    left = "/bob/left_wheel_encoder_node/tick"
+    assert_one_line_error(
+        duckie("odometry", two_robots, "--left", left, "--right", left),
+        f"duckie: --left and --right are both {left}: give each wheel its own encoder topic.",
+    )
+    assert_one_line_error(
+        duckie("odometry", two_robots),
+        "duckie: two.bag has 2 left encoder topics (/alice/left_wheel_encoder_node/tick, "
+        "/bob/left_wheel_encoder_node/tick): choose one with --left.",
+    )
+    assert_one_line_error(
+        duckie("odometry", two_robots, "--left", "/alice/right_wheel_encoder_node/tick"),
+        "choose the one that pairs with /alice/right_wheel_encoder_node/tick with --right.",
+    )
+
+
+def test_a_time_base_that_does_not_fit_is_said_with_the_option(tmp_path):
+    # Every header stamp 0, as in some students' bags: only record times can be used.
+    ticks = [(k * S // 30 + 1, k) for k in range(10)]
+    path = write_encoders(tmp_path / "zero.bag", ticks, ticks, skew_ns=S)
+    assert_one_line_error(
+        duckie("odometry", path, "--time-base", "header"),
+        "duckie: Every header stamp on /duckiebot/left_wheel_encoder_node/tick is 0; use "
+        "--time-base record.\n",
+    )
+
+
+def test_odometry_plot_draws_the_path_the_ticks_give(encoders, tmp_path, monkeypatch, capsys):
+    from duckielib import plots
+    from duckielib.tools.cli import main
+
+    drawn = []
+    save_figure = plots.save_figure
+
+    def spy(figure, path):
+        drawn.append(figure)
+        return save_figure(figure, path)
+
+    monkeypatch.setattr(plots, "save_figure", spy)
+    figure_path = tmp_path / "path.png"
+    args = ["bag", "odometry", str(encoders), "--solution", str(SOLUTION), "--start", "0", "0", "0"]
+    assert main([*args, "--plot", str(figure_path)]) == 0
+    assert capsys.readouterr().out.endswith(f"Wrote {figure_path}.\n")
+    assert figure_path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    (figure,) = drawn
+    path_axes, x_axes = figure.axes[:2]
+    (line,) = path_axes.get_lines()
+    assert line.get_label() == "odometry (your solution)"
+    xy = line.get_xydata()
+    travelled = 2 * 89 * 2 * math.pi * 0.0318 / 135
+    assert xy[0] == pytest.approx([0.0, 0.0])
+    assert xy[-1] == pytest.approx([travelled, 0.0], abs=1e-9)
+    assert len(xy) == 90
+    t, x = x_axes.get_lines()[0].get_xydata().T
+    assert t[0] == 0.0
+    assert t[-1] == pytest.approx(89 / 30)  # from the first pose on
+    assert x[-1] == pytest.approx(travelled)

@@ -48,8 +48,8 @@ def test_written_bags_read_back_exactly_with_rosbags(tmp_path, compression):
 def test_the_writer_writes_the_same_bytes_as_rosbags_own_write(tmp_path, compression):
     topics = [("/duckiebot/pose", Pose2DStamped), (LEFT, type(encoder(0, 0))), ("/s", String)]
     messages = [
-        (topics[i % 3], 10_000_000 * i + (999_999_999 if i == 7 else 0)) for i in range(400)
-    ]
+        (topics[i % 3], 10_000_000 * i + (999_999_999 if i == 7 else 0) + 1) for i in range(400)
+    ]  # from 1 ns: ROS 1's smallest valid time (a time 0 is written as 1 ns, tested below)
     ours, theirs = tmp_path / "ours.bag", tmp_path / "theirs.bag"
     with BagWriter(ours, compression) as writer:
         writer._writer.chunk_threshold = 4096  # several chunks, each with its index
@@ -160,3 +160,17 @@ def test_an_unindexed_bag_suggests_repair(tmp_path):
     with pytest.raises(BagError, match="duckie bag repair"):
         Bag(path)
     writer.close()
+
+
+def test_a_record_time_of_0_is_written_as_ros_smallest_valid_time(tmp_path):
+    """rosbag play drops a message recorded at time 0 ("invalid time"): it becomes 1 ns."""
+    with BagWriter(tmp_path / "zero.bag") as writer:
+        writer.write("/s", String(data="first"), 0)
+        writer.write("/s", String(data="second"), 5)
+    bag = Bag(tmp_path / "zero.bag")
+    assert [item.time_ns for item in bag.read("/s")] == [1, 5]
+    assert bag.start_ns == 1
+    with BagWriter(tmp_path / "negative.bag") as writer, pytest.raises(
+        BagError, match="whole number of nanoseconds >= 0, not -1"
+    ):
+        writer.write("/s", String(data="x"), -1)

@@ -81,8 +81,9 @@ def recorded(tmp_path_factory):
 
 
 #: What the talker sent in 1 s: (topic, record time in ns, values).
+#: The first message, written at time 0, is recorded at 1 ns: ROS 1's smallest valid time.
 EXPECTED = sorted(
-    [(CHATTER, i * NS // 10, {"data": f"hello {i}"}) for i in range(11)]
+    [(CHATTER, max(1, i * NS // 10), {"data": f"hello {i}"}) for i in range(11)]
     + [(TICKS, i * NS // 10 - 5_000_000, {"data": 3 * i}) for i in range(1, 11)],
     key=lambda item: item[1],
 )
@@ -105,7 +106,7 @@ def test_a_node_writes_a_bag_on_simulated_time(recorded):
         assert bag.get_message_count() == 21
         assert bag.get_message_count(CHATTER) == 11
         assert bag.get_message_count([CHATTER, TICKS, "/nothing"]) == 21
-        assert bag.get_start_time() == 0.0
+        assert bag.get_start_time() == 1e-9
         assert bag.get_end_time() == 1.0
         info = bag.get_type_and_topic_info()
         assert info.msg_types == {
@@ -209,7 +210,7 @@ def debian(script, *args, tmp_path):
 def test_debians_rosbag_reads_the_nodes_bag(recorded, tmp_path):
     report = json.loads(debian(DEBIAN_READ, recorded, tmp_path=tmp_path))
     assert report["count"] == 21
-    assert (report["start"], report["end"]) == (0.0, 1.0)
+    assert (report["start"], report["end"]) == (1e-9, 1.0)
     assert report["types"] == {
         "duckietown_msgs/WheelEncoderStamped": WheelEncoderStamped._md5sum,
         "std_msgs/String": String._md5sum,

@@ -1,0 +1,60 @@
+"""Every bag ``duckie mission`` writes replays whole in Debian's ``rosbag play``.
+
+ROS 1 refuses record times below its smallest valid time (1 ns): Debian's rosbag_storage
+drops such a message when it loads the bag's index, so ``rosbag play`` would skip what the
+simulation publishes at its very start (the first LED pattern, the first true pose). Here a
+mission bag is played on a real roscore, recorded again by ``rosbag record``, and every topic
+must arrive with every message.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+
+import pytest
+
+from duckielib.bags import Bag
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+
+@pytest.fixture(scope="module")
+def mission_bag(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("mission")
+    result = subprocess.run(
+        [sys.executable, "-m", "duckielib.tools.cli", "mission", "--out", str(folder)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    return folder / "mission.bag"
+
+
+def test_a_mission_bag_replays_whole_in_rosbag_play(master, mission_bag):
+    original = Bag(mission_bag)
+    counts = {name: info.count for name, info in original.topics.items()}
+    # The first messages are recorded as the simulation starts.
+    assert min(message.time_ns for message in original.messages()) < 1_000_000
+    # Wall-clock time for this replay: record times are the messages' receipt times.
+    master.api.setParam("/test", "/use_sim_time", False)
+    replayed = master.folder / "replayed.bag"
+    recorder = master.record(replayed, sorted(counts))
+    play = subprocess.run(
+        ["rosbag", "play", "--delay", "3", "--rate", "8", "--queue", "10000", str(mission_bag)],
+        env=master.env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    time.sleep(1.0)  # the last messages reach the recorder
+    master.stop(recorder)
+    master.wait_for_bag(replayed)
+    assert play.returncode == 0, play.stdout + play.stderr
+    assert "invalid time" not in play.stdout + play.stderr
+    got = {name: info.count for name, info in Bag(replayed).topics.items()}
+    assert got == counts
