@@ -41,7 +41,7 @@ def _grade(args: argparse.Namespace) -> int:
     import warnings
     from pathlib import Path
 
-    from autograder.grade import grade_class
+    from autograder.grade import find_submissions, grade_class
     from autograder.sandbox import check_sandbox
 
     # nbgrader's own gradebook code warns about its SQLAlchemy session: nothing to act on.
@@ -55,6 +55,12 @@ def _grade(args: argparse.Namespace) -> int:
         )
     if args.jobs < 1:
         raise DuckielibError(f"--jobs must be 1 or more, not {args.jobs}.")
+    students, skipped = find_submissions(submissions)
+    if not students:
+        raise DuckielibError(
+            f"No submission was found in {submissions}: it must hold one folder (or .zip) per "
+            "student, named after them" + (f" (skipped: {'; '.join(skipped)})." if skipped else ".")
+        )
     if args.no_sandbox:
         print("duckie: grading WITHOUT a sandbox: student code runs with your rights.")
     else:

@@ -190,3 +190,127 @@ def test_ctrl_c_that_compiled_code_turns_into_another_error_still_ends_as_interr
     result = _interrupted_mission(tmp_path, patch)
     assert (result.returncode, result.stderr) == (130, "duckie: interrupted.\n")
     assert (tmp_path / "mission.bag").exists()
+
+
+def assert_one_sentence(result, status, start):
+    """``result`` ended with ``status`` and the one line ``duckie: START...``, no traceback."""
+    assert result.returncode == status, result.stderr
+    assert "Traceback" not in result.stderr
+    said = result.stderr.splitlines()
+    assert len(said) == 1, said
+    assert said[0].startswith(f"duckie: {start}"), said[0]
+    assert said[0].endswith("."), said[0]
+
+
+@pytest.mark.parametrize(
+    ("out", "said"),
+    [
+        ("/proc/x", "Cannot create the folder /proc/x for the run's files (No such file or "),
+        ("/dev/null", "/dev/null is a file, not a folder: choose a folder for the run's files"),
+    ],
+)
+def test_a_folder_the_run_cannot_write_to_is_one_sentence(out, said):
+    result = duckie("mission", "--out", out, "--no-animation")
+    assert_one_sentence(result, 1, said)
+
+
+def test_a_negative_seed_is_refused_by_the_command_line():
+    result = duckie("mission", "--seed", "-1")
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert result.stderr.splitlines()[-1] == (
+        "duckie mission: error: argument --seed: give a whole number 0 or more, not '-1'"
+    )
+
+
+@pytest.mark.parametrize("call", ["sys.exit(3)", "exit()"])
+def test_a_solution_that_exits_while_imported_is_named(tmp_path, call):
+    solution = tmp_path / "mine.py"
+    solution.write_text(f"import sys\n\n{call}\n")
+    result = duckie("mission", "--solution", str(solution), "--out", str(tmp_path / "run"))
+    assert_one_sentence(
+        result,
+        1,
+        f"The solution from {solution} called sys.exit() or exit() while being imported: ",
+    )
+    assert not (tmp_path / "run").exists()
+
+
+def test_sigterm_during_the_drive_ends_as_ctrl_c_does(tmp_path):
+    from duckielib.bags import Bag
+
+    # SIGTERM once the simulated clock passes 10 s, as `kill` or a job scheduler sends it.
+    patch = (
+        "from duckielib.sim.simulator import Simulator\n"
+        "advance = Simulator._advance\n"
+        "def _advance(self, count):\n"
+        "    advance(self, count)\n"
+        "    if self._steps * self.dt >= 10.0 and not getattr(self, 'sent', False):\n"
+        "        self.sent = True\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "Simulator._advance = _advance\n"
+    )
+    result = _interrupted_mission(tmp_path, patch)
+    assert (result.returncode, result.stderr) == (
+        143,
+        "duckie: stopped by SIGTERM (a request to end).\n",
+    )
+    assert not (tmp_path / "mission.bag.active").exists()
+    executed = Bag(tmp_path / "mission.bag").read(
+        "/duckiebot/wheels_driver_node/wheels_cmd_executed"
+    )
+    assert 9.9 < executed[-1].time < 10.5
+    assert (executed[-1].message.vel_left, executed[-1].message.vel_right) == (0.0, 0.0)
+
+
+def test_a_recording_cut_off_by_a_killed_run_is_kept_and_said(tmp_path):
+    cut_off = b"#ROSBAG V2.0\n" + b"\0" * 100
+    (tmp_path / "mission.bag.active").write_bytes(cut_off)
+    (tmp_path / "unfinished-1.bag.active").write_bytes(b"an earlier one")
+    result = duckie("mission", "--out", str(tmp_path), "--no-animation")
+    assert result.returncode == 0, result.stderr
+    kept = tmp_path / "unfinished-2.bag.active"
+    assert kept.read_bytes() == cut_off
+    assert (tmp_path / "unfinished-1.bag.active").read_bytes() == b"an earlier one"
+    assert (
+        f"note: {tmp_path / 'mission.bag.active'} is a recording that was cut off before it "
+        f"finished; it is kept as {kept}, and 'duckie bag repair {kept} "
+        f"{tmp_path / 'unfinished-2.bag'}' recovers its messages.\n"
+    ) in result.stdout
+    assert (tmp_path / "mission.bag").exists()
+
+
+def test_no_error_sentence_repeats_its_full_stop(tmp_path):
+    # Messages that end with another error's text (a library's, a student's) must not end
+    # with ".." where that text has its own full stop.
+    broken = tmp_path / "broken.bag"
+    broken.write_bytes(b"#ROSBAG V2.0\nxx")
+    failing = tmp_path / "failing.py"
+    failing.write_text('raise ValueError("Bad value.")\n')
+    sample = str(_sample_bag())
+    solution = tmp_path / "ticks.py"
+    solution.write_text(
+        (ROOT / "tests" / "bags" / "bagtools.py").read_text()
+        + "\n\ndef delta_phi(ticks, prev_ticks, resolution):\n"
+        + '    raise ValueError("Ticks went wrong.")\n'
+    )
+    commands = [
+        ("bag", "info", str(broken)),
+        ("bag", "odometry", sample, "--solution", str(solution)),
+        ("mission", "--solution", str(failing), "--out", str(tmp_path / "run")),
+        ("mission", "--out", "/dev/null"),
+    ]
+    for command in commands:
+        result = duckie(*command)
+        assert result.returncode == 1, (command, result.stderr)
+        (said,) = result.stderr.splitlines()
+        assert said.startswith("duckie: ")
+        assert re.search(r"(?<!\.)\.\.(?!\.)", said) is None, said
+        assert said.endswith("."), said
+    assert said.startswith("duckie: /dev/null is a file")
+
+
+def _sample_bag():
+    from duckielib.bags import sample_bag
+
+    return sample_bag()

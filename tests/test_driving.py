@@ -103,7 +103,14 @@ def test_a_node_that_never_ends_loses_the_states_points_with_a_sentence(
 def test_a_mission_that_runs_out_of_wall_time_leaves_the_next_ones_undriven(sandbox, tmp_path):
     source = export_solution(ROOT / "solutions").source
     solution = tmp_path / "solution.py"
-    solution.write_text(source + "\n\ndef mission_node(mission):\n    while True:\n        pass\n")
+    # It calls rospy, so the graph does not stop it, but each step costs real time: the
+    # simulation crawls, and only the wall clock ends it.
+    slow = (
+        "\n\ndef mission_node(mission):\n    from duckielib.ros import rospy\n"
+        "    rospy.init_node('mission_node')\n"
+        "    while True:\n        sum(range(200000))\n        rospy.get_time()\n"
+    )
+    solution.write_text(source + slow)
     missions = drive_missions(solution, tmp_path / "box", Limits(mission_seconds=15))
     assert missions["square_then_circle"].timed_out
     assert {name: driving.score for name, driving in missions.items()} == dict.fromkeys(MISSIONS, 0)
@@ -212,25 +219,32 @@ def test_a_mission_that_never_ends_is_scored_from_its_bag_in_the_sandbox(
 def test_a_mission_that_never_ends_is_stopped_by_the_wall_clock_and_scored(
     sandbox, tmp_path, reference
 ):
-    # A busy loop after the circle: the simulation cannot go on, only the wall clock ends it.
+    # A busy loop after the circle: the simulation cannot go on, so the graph stops the node
+    # after 10 s of real time, saying why.
     busy = changed(reference, _DONE, "while True:\n        pass", tmp_path / "s.py")
     driving = drive(busy, tmp_path / "box", Limits(mission_seconds=20))
-    assert driving.reasons[:2] == [
-        "The mission did not end within 20 s of wall time.",
-        "It is scored from the bag it wrote until then.",
-    ]
+    assert driving.reasons[:2] == [STALLED, "It is scored from the bag it wrote until then."]
     assert driving.parts == {
         "bag": 5, "states": 0, "stops": 15, "square": 20, "return": 20, "circle": 20,
     }  # fmt: skip
 
 
-def test_a_busy_node_from_the_start_scores_zero_with_the_wall_clock_reason(sandbox, tmp_path):
+#: Why the graph stops a mission node whose code never waits.
+STALLED = (
+    "The mission could not run to its end: The mission node stopped: its code ran for 10 s of "
+    "real time without calling rospy, and simulated time cannot move while a node's code runs: "
+    "a loop that waits for a callback or another thread never sees it happen. Wait inside the "
+    "loop with rospy.sleep() or rate.sleep()."
+)
+
+
+def test_a_busy_node_from_the_start_scores_zero_saying_why_it_was_stopped(sandbox, tmp_path):
     source = export_solution(ROOT / "solutions").source
     solution = tmp_path / "solution.py"
     solution.write_text(source + "\n\ndef mission_node(mission):\n    while True:\n        pass\n")
     driving = drive(solution, tmp_path / "box", Limits(mission_seconds=15))
     assert driving.score == 0
-    assert driving.reasons == ["The mission did not end within 15 s of wall time."]
+    assert driving.reasons == [STALLED]
 
 
 def test_an_unfinished_course_scores_zero_with_the_students_reason(sandbox, tmp_path):

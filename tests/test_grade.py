@@ -334,6 +334,32 @@ def test_duckie_grade_refuses_a_missing_folder(tmp_path):
     assert "Traceback" not in result.stderr
 
 
+def test_duckie_grade_refuses_a_folder_without_a_submission(tmp_path):
+    submissions = tmp_path / "submissions"
+    submissions.mkdir()
+    (submissions / "notes.txt").write_text("the class list")
+    result = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "duckielib.tools.cli",
+            "grade",
+            str(submissions),
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert result.returncode == 1
+    assert result.stderr == (
+        f"duckie: No submission was found in {submissions}: it must hold one folder (or .zip) "
+        "per student, named after them (skipped: notes.txt: neither a folder nor a .zip).\n"
+    )
+    assert not (tmp_path / "out").exists(), "no empty grades.csv"
+
+
 def test_notebooks_linked_to_the_reference_are_neither_graded_nor_driven(sandbox, tmp_path):
     student = tmp_path / "submissions" / "eve"
     for notebook in sorted((ROOT / "solutions").glob("*/*.ipynb")):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -243,3 +244,89 @@ def test_the_command_line_runs_the_mission_and_refuses_an_unfinished_course(tmp_
     assert refused.returncode == 1
     assert refused.stderr.startswith("duckie: Finish notebook 05_odometry: write ")
     assert "Traceback" not in refused.stderr
+
+
+def _failing_after(reference, x_limit, failure):
+    """The reference with an estimate_pose that fails (``failure(pose)``) once x passes a limit."""
+
+    def estimate_pose(R, baseline, x_prev, y_prev, theta_prev, delta_phi_left, delta_phi_right):  # noqa: N803
+        pose = reference.estimate_pose(
+            R, baseline, x_prev, y_prev, theta_prev, delta_phi_left, delta_phi_right
+        )
+        return failure(pose) if pose[0] > x_limit else pose
+
+    return {**vars(reference), "estimate_pose": estimate_pose}
+
+
+def _nan_heading(pose):
+    return pose[0], pose[1], math.nan
+
+
+def _divided_by_zero(pose):
+    return pose[0] / 0.0
+
+
+@pytest.mark.parametrize(
+    ("failure", "said"),
+    [
+        (_nan_heading, r"returned \(0\.8\d+, 0\.3\d+, nan\): every number it returns must be"),
+        (_divided_by_zero, r"raised ZeroDivisionError in _divided_by_zero: float division by "),
+    ],
+    ids=["nan", "exception"],
+)
+def test_the_first_failure_of_the_odometry_ends_the_run_at_once(reference, tmp_path, failure, said):
+    # Half-way along the square's first side (it starts about 7 s in), the solution fails.
+    parts = _failing_after(reference, 0.8, failure)
+    pattern = r"^estimate_pose\(0\.0318, 0\.1, 0\.7\d+, 0\.3\d+, [\d.e-]+, [\d.]+, [\d.]+\), from "
+    with pytest.raises(SolutionError, match=pattern + r"notebook 05_odometry, ") as caught:
+        run_mission(parts, out=tmp_path, animation=False)
+    message = str(caught.value)
+    assert re.search(said, message), message
+    assert message.endswith(f"The run's log is in {tmp_path / 'log.txt'}.")
+    assert "\n" not in message
+    # The robot stopped there and then, its bag whole, its wheels at zero.
+    bag = Bag(tmp_path / "mission.bag")
+    executed = bag.read("/duckiebot/wheels_driver_node/wheels_cmd_executed")
+    assert executed[-1].time < 10.0, "the run ended when the odometry failed"
+    assert (executed[-1].message.vel_left, executed[-1].message.vel_right) == (0.0, 0.0)
+    assert not (tmp_path / "mission.bag.active").exists()
+    # One error in the log, with one traceback, not one per encoder reading.
+    log = (tmp_path / "log.txt").read_text()
+    assert log.count("[ERROR]") == 1
+    # A solution's exception comes with its own traceback (and then the node's).
+    tracebacks = 1 if failure is _nan_heading else 2
+    assert log.count("Traceback (most recent call last)") == tracebacks
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["error"] == message
+
+
+def test_bad_places_for_the_files_and_bad_seeds_are_refused_with_a_sentence(reference, tmp_path):
+    with pytest.raises(ConfigError, match=r"^The simulator's seed must be a whole number 0 or"):
+        run_mission(reference, seed=-1, out=tmp_path)
+    a_file = tmp_path / "notes.txt"
+    a_file.write_text("mine")
+    with pytest.raises(MissionError, match=r"notes\.txt is a file, not a folder: choose a folder"):
+        run_mission(reference, out=a_file)
+    assert a_file.read_text() == "mine"
+    with pytest.raises(MissionError, match=r"^Cannot create the folder .*notes\.txt/run for the"):
+        run_mission(reference, out=a_file / "run")
+
+
+def test_an_error_a_node_only_logged_is_said_as_one_sentence(reference, tmp_path):
+    def light_service_node():
+        import rospy
+        from duckietown_msgs.msg import WheelEncoderStamped
+
+        def on_tick(reading):
+            raise ValueError("no light for this tick")
+
+        rospy.Subscriber("left_wheel_encoder_node/tick", WheelEncoderStamped, on_tick)
+        reference.light_service_node()
+
+    parts = {**vars(reference), "light_service_node": light_service_node}
+    with pytest.raises(MissionError) as caught:
+        run_mission(parts, out=tmp_path, animation=False, time_limit=3)
+    assert str(caught.value) == (
+        "The /duckiebot/light_service_node logged an error: ValueError: no light for this tick. "
+        f"The run's log is in {tmp_path / 'log.txt'}."
+    )

@@ -16,11 +16,12 @@ Pure: standard library only, Python 3.8 (deployed to the robot).
 from __future__ import annotations
 
 import time
-from typing import Any, Sequence
+from typing import Any, List, Sequence
 
 from duckielib.missions import TASK_START
 from duckielib.odometry import Odometry
 from duckielib.ros.backend import message_classes
+from duckielib.solution import SolutionError
 
 __all__ = ["camera_republisher_node", "odometry_node"]
 
@@ -38,6 +39,12 @@ def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START
         rospy: the rospy module to run with.
         solution: the solution whose ``WheelPairing`` and ``estimate_pose`` do the work.
         start: the pose (x, y, theta) the robot starts from, in metres and radians.
+
+    Raises:
+        SolutionError: when a function of the solution fails or returns a number that is not
+            finite. The node then stops at once (its ``~pose`` would be wrong from then on):
+            it shuts down and raises that first failure, instead of logging one error per
+            encoder reading.
     """
     msg = message_classes(rospy)
     rospy.init_node("odometry_node")
@@ -54,8 +61,18 @@ def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START
     out = msg.Pose2DStamped()
     out.header.frame_id = "world"
 
+    failures: List[SolutionError] = []
+
     def on_tick(reading: Any, wheel: str) -> None:
-        pose = odometry.add(wheel, reading.data)
+        if failures:
+            return  # readings queued before the shutdown took effect
+        try:
+            pose = odometry.add(wheel, reading.data)
+        except SolutionError as error:
+            # Every later pose would be wrong too: stop at the first failure, and say it once.
+            failures.append(error)
+            rospy.signal_shutdown(f"the solution's odometry failed: {error}")
+            return
         if pose is None:
             return
         out.x, out.y, out.theta = pose
@@ -71,6 +88,8 @@ def odometry_node(rospy: Any, solution: Any, start: Sequence[float] = TASK_START
             queue_size=10,
         )
     rospy.spin()
+    if failures:
+        raise failures[0]
 
 
 def _wait_for_params(rospy: Any, names: Sequence[str]) -> None:

@@ -13,7 +13,8 @@ those processes' mains. Each takes the real rospy, loads the solution named by t
 - :func:`camera_republisher_main`: the camera's images, republished for the laptop.
 
 A problem with the solution (missing, unfinished) ends the node at once with one sentence on
-stderr and exit status 1, before the robot moves.
+stderr and exit status 1, before the robot moves; so does the first failure of the solution's
+odometry functions (an error, or a NaN) while the robot drives.
 
 Pure: standard library only, Python 3.8 (deployed to the robot).
 """
@@ -94,7 +95,10 @@ def odometry_main(argv: Optional[List[str]] = None) -> None:
     rospy = _real_rospy("odometry_node")
     solution = _solution("odometry_node", ODOMETRY_PARTS)
     mission = mission_named(_arguments(rospy, argv).mission)
-    odometry_node(rospy, solution, mission.start)
+    try:
+        odometry_node(rospy, solution, mission.start)
+    except DuckielibError as error:  # the solution's odometry failed: the node stopped
+        _fail("odometry_node", str(error))
 
 
 def light_service_main() -> None:

@@ -116,7 +116,8 @@ class _Watchdog:
                         continue
                     if not warned:
                         held[3] = True
-                        graph.log_message(ERROR, actor.name, graph.stall_message(actor))
+                        why = graph.stall_message(actor)
+                        graph.log_message(ERROR, actor.name, f"stopped: {why}.")
                     held[2] = now  # raise again later if the code swallows it
                     ctypes.pythonapi.PyThreadState_SetAsyncExc(
                         ctypes.c_ulong(thread_id), ctypes.py_object(_Stalled)
@@ -227,7 +228,7 @@ class _Actor:
         except KeyboardInterrupt as error:  # Ctrl-C while the node's code ran: the driver raises it
             self.interrupt = error
         except _Stalled:  # the watchdog logged why
-            self.error = ROSException(self.graph.stall_message(self))
+            self.error = _Stalled(self.graph.stall_message(self))
         except BaseException as error:
             self.error = error
             self.graph.log_message(ERROR, self.name, format_error(error))
@@ -452,6 +453,8 @@ class Graph(ParameterServer):
         if self._crash is not None:
             name, error = self._crash
             self._crash = None
+            if isinstance(error, _Stalled):
+                raise NodeCrashed(f"Node {name} stopped: {error}.", node=name)
             where = "in the log above" if self.echo_logs else "in graph.log"
             raise NodeCrashed(
                 f"Node {name} stopped with {type(error).__name__}: {error} "
@@ -676,10 +679,10 @@ class Graph(ParameterServer):
     def stall_message(self, actor: _Actor) -> str:
         """Why the graph stopped ``actor``'s code: it ran too long without waiting."""
         return (
-            f"the code of node {actor.name} ran for {self.stall_limit:g} s of real time "
-            "without calling rospy, and simulated time cannot move while a node's code runs: "
-            "a loop that waits for a callback or another thread never sees it happen. Wait "
-            "inside the loop with rospy.sleep() or rate.sleep() (rospy.Rate)."
+            f"its code ran for {self.stall_limit:g} s of real time without calling rospy, and "
+            "simulated time cannot move while a node's code runs: a loop that waits for a "
+            "callback or another thread never sees it happen. Wait inside the loop with "
+            "rospy.sleep() or rate.sleep()"
         )
 
     def driving_here(self) -> bool:

@@ -13,9 +13,11 @@ from __future__ import annotations
 import ast
 import inspect
 import linecache
+import math
 import os
 import sys
 import textwrap
+import traceback
 import types
 from pathlib import Path
 from typing import Any, Callable, Iterable, List, Mapping, Tuple, Union
@@ -65,10 +67,17 @@ def _module_from_source(source: str, filename: str) -> types.ModuleType:
     try:
         with modules_installed():
             exec(compile(source, filename, "exec"), module.__dict__)
+    except SystemExit:
+        sys.modules.pop(name, None)
+        raise SolutionError(
+            f"The solution from {filename} called sys.exit() or exit() while being imported: "
+            "take that call out of the cells tagged 'export' (or put it inside a function), "
+            "save, and try again."
+        ) from None
     except Exception as error:
         sys.modules.pop(name, None)
         raise SolutionError(
-            f"The solution from {filename} fails to import: {type(error).__name__}: {error}"
+            f"The solution from {filename} fails to import: {_raised(error)}."
         ) from error
     return module
 
@@ -195,24 +204,87 @@ def check_part(solution: Any, name: str, where: str = "the solution") -> Any:
 def call_part(name: str, function: Callable[..., Any], *args: Any) -> Any:
     """Call a solution's part, turning its failures into a :class:`SolutionError`.
 
+    A result that holds a number that is not finite (NaN or an infinity) is a failure too:
+    a pose made of NaN would silently spoil every pose after it.
+
     Raises:
         SolutionError: naming the notebook to finish if the part is not implemented yet, or
-            the call and the error if it fails.
+            the call (its inputs) and what went wrong: the error it raised, or the
+            non-finite result it returned.
     """
     part = CONTRACT[name.split(".", maxsplit=1)[0]]
     try:
-        return function(*args)
+        result = function(*args)
     except NotImplementedError:
         raise SolutionError(
             f"{finish_notebook(part)}: {name} is not implemented yet (run its cell after "
             "writing it)."
         ) from None
-    except Exception as error:
-        arguments = ", ".join(repr(argument) for argument in args)
+    except SystemExit:
         raise SolutionError(
-            f"{name}({arguments}), from notebook {part.notebook}, raised "
-            f"{type(error).__name__}: {error}"
+            f"{_call(name, args)}, from notebook {part.notebook}, called sys.exit() or exit(): "
+            "a function of the solution must return its result instead."
+        ) from None
+    except Exception as error:
+        raise SolutionError(
+            f"{_call(name, args)}, from notebook {part.notebook}, raised "
+            f"{_raised(error, _where(name, function, error))}."
         ) from error
+    if not _finite(result):
+        raise SolutionError(
+            f"{_call(name, args)}, from notebook {part.notebook}, returned {_shown(result)}: "
+            "every number it returns must be finite, not NaN or infinite (look for a division "
+            "by zero, or a NaN among the values it computes with)."
+        )
+    return result
+
+
+def _finite(value: Any) -> bool:
+    """Whether every number in ``value`` (a number, a sequence, a numpy array) is finite."""
+    if value is None or isinstance(value, (int, str, bytes)):
+        return True
+    if isinstance(value, float):  # numpy's float64 too
+        return math.isfinite(value)
+    if isinstance(value, (tuple, list)):
+        return all(map(_finite, value))
+    if hasattr(value, "dtype") and hasattr(value, "tolist"):  # numpy arrays and scalars
+        return _finite(value.tolist())
+    return True
+
+
+def _shown(value: Any) -> str:
+    """``value`` as a student would write it: numpy's numbers and arrays as plain ones."""
+    if hasattr(value, "dtype") and hasattr(value, "tolist"):
+        value = value.tolist()
+    if isinstance(value, list):
+        return f"[{', '.join(map(_shown, value))}]"
+    if isinstance(value, tuple):
+        return f"({', '.join(map(_shown, value))}{',' if len(value) == 1 else ''})"
+    return repr(float(value)) if isinstance(value, float) else repr(value)
+
+
+def _call(name: str, args: Tuple[Any, ...]) -> str:
+    """A call as code: ``estimate_pose(0.0318, 0.1, ...)``."""
+    return f"{name}({', '.join(map(_shown, args))})"
+
+
+def _raised(error: BaseException, where: str = "") -> str:
+    """An error as a clause of a sentence, on one line: ``ZeroDivisionError in f: division``."""
+    text = " ".join(str(error).split()).rstrip(".")
+    return f"{type(error).__name__}{where}" + (f": {text}" if text else "")
+
+
+def _where(name: str, function: Callable[..., Any], error: BaseException) -> str:
+    """Where in the solution ``error`` was raised (`` in delta_phi``), if not in ``name``."""
+    code = getattr(getattr(function, "__func__", function), "__code__", None)
+    mine = [
+        frame
+        for frame in traceback.extract_tb(error.__traceback__)
+        if code is not None and frame.filename == code.co_filename
+    ]
+    if not mine or mine[-1].name == name.rsplit(".", 1)[-1]:
+        return ""
+    return f" in {mine[-1].name}"
 
 
 def _definition_ast(source: str, name: str) -> Any:

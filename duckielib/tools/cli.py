@@ -1,18 +1,22 @@
 """The ``duckie`` command: the course's tools for students and instructors.
 
 Errors the user can fix are printed as one sentence on stderr, without a traceback, and the
-command exits with status 1 (2 for a badly formed command line, as argparse does).
+command exits with status 1 (2 for a badly formed command line, as argparse does). Ctrl-C and
+SIGTERM end a command as cleanly as its own end would (a mission's bag is closed whole and
+its wheels stopped), with a sentence and status 130 or 143.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import os
+import re
 import signal
 import sys
 import threading
-from typing import Any, Callable, Dict, Iterator, List, Optional
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
 from duckielib.errors import DuckielibError
 
@@ -51,8 +55,15 @@ def _bag_plot(args: argparse.Namespace) -> int:
     if not tracks:
         raise BagError(
             f"{bag.path.name} has no topic of type duckietown_msgs/Pose2DStamped to plot; "
-            "for a bag of encoder ticks, compute the poses with 'duckie bag odometry'."
+            "for a bag of encoder ticks, draw the path odometry computes from them with "
+            f"'duckie bag odometry {args.bag} --plot {args.output}'."
         )
+    print(f"Wrote {_pose_figure(tracks, bag.path.name, args.output)}.")
+    return 0
+
+
+def _pose_figure(tracks: List[Any], title: str, path: str) -> Any:
+    """Draw pose ``tracks`` to the figure file ``path``, times from the first pose; the path."""
     import dataclasses
 
     from duckielib import plots
@@ -60,9 +71,8 @@ def _bag_plot(args: argparse.Namespace) -> int:
     # Times from the bag's first pose: a real robot's clock gives seconds since 1970.
     start = min((float(track.t[0]) for track in tracks if len(track)), default=0.0)
     tracks = [dataclasses.replace(track, t=track.t - start) for track in tracks]
-    figure = plots.pose_figure(tracks, title=f"{bag.path.name} (t = 0 at {start:.3f} s)")
-    print(f"Wrote {plots.save_figure(figure, args.output)}.")
-    return 0
+    figure = plots.pose_figure(tracks, title=f"{title} (t = 0 at {start:.3f} s)")
+    return plots.save_figure(figure, path)
 
 
 def _bag_odometry(args: argparse.Namespace) -> int:
@@ -73,15 +83,19 @@ def _bag_odometry(args: argparse.Namespace) -> int:
 
     solution = load_solution(args.solution)
     bag = Bag(args.bag)
+    left, right = _encoder_pair(bag, args.left, args.right)
     track = replay_odometry(
         bag,
         solution,
         start=args.start,
-        left_topic=args.left,
-        right_topic=args.right,
+        left_topic=left,
+        right_topic=right,
         time_base=args.time_base,
+        label=f"odometry ({'your' if args.solution else 'reference'} solution)",
     )
     x, y, theta = track.final_pose
+    title = f"{bag.path.name}: odometry from the encoder ticks"
+    wrote = _pose_figure([track], title, args.plot) if args.plot else None
     if args.json:
         print(json.dumps({"x": x, "y": y, "theta": theta}))
         return 0
@@ -89,7 +103,65 @@ def _bag_odometry(args: argparse.Namespace) -> int:
         print(f"note: {note}")
     print(f"{len(track)} poses from {track.t[0]:.3f} s to {track.t[-1]:.3f} s.")
     print(f"final pose: x = {x:.4f} m, y = {y:.4f} m, theta = {theta:.4f} rad")
+    if wrote is not None:
+        print(f"Wrote {wrote}.")
     return 0
+
+
+#: The message type of the wheels' encoder topics.
+_ENCODER_TYPE = "duckietown_msgs/WheelEncoderStamped"
+
+
+def _encoder_pair(bag: Any, left: Optional[str], right: Optional[str]) -> Tuple[Any, Any]:
+    """The encoder topics ``--left`` and ``--right`` ask for; with one given, the other's match.
+
+    The other wheel's topic is the given one's twin (``left_wheel_encoder`` for
+    ``right_wheel_encoder``, same namespace), or else the bag's only topic of that wheel.
+
+    Returns:
+        The two topics, or None for what ``replay_odometry`` is to find by name.
+
+    Raises:
+        DuckielibError: if both are the same topic, or which topic to use is not clear.
+    """
+    if left is not None and left == right:
+        raise DuckielibError(
+            f"--left and --right are both {left}: give each wheel its own encoder topic."
+        )
+    encoders = bag.topics_of_type(_ENCODER_TYPE)
+    if left is None and right is None:
+        for side in ("left", "right"):
+            found = [name for name in encoders if f"{side}_wheel_encoder" in name]
+            if len(found) > 1:
+                raise DuckielibError(
+                    f"{bag.path.name} has {len(found)} {side} encoder topics "
+                    f"({', '.join(found)}): choose one with --{side}."
+                )
+        return None, None  # one of each, or the library says what is missing
+    if left is not None and right is not None:
+        return left, right
+    if left is not None:
+        given, side, other = left, "left", "right"
+    else:
+        given, side, other = str(right), "right", "left"
+    bag.topic(given)  # a sentence if the bag has no such topic
+    twin = given.replace(f"{side}_wheel_encoder", f"{other}_wheel_encoder")
+    found = [name for name in encoders if f"{other}_wheel_encoder" in name]
+    if twin != given and twin in found:
+        chosen = twin
+    elif len(found) == 1 and found[0] != given:
+        chosen = found[0]
+    elif len(found) > 1:
+        raise DuckielibError(
+            f"{bag.path.name} has {len(found)} {other} encoder topics ({', '.join(found)}): "
+            f"choose the one that pairs with {given} with --{other}."
+        )
+    else:
+        raise DuckielibError(
+            f"{bag.path.name} has no {other} encoder topic to pair with {given}: give one "
+            f"with --{other}."
+        )
+    return (given, chosen) if side == "left" else (chosen, given)
 
 
 def _bag_repair(args: argparse.Namespace) -> int:
@@ -225,13 +297,37 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         choices=("ideal", "realistic"),
         help="the simulated robot: ideal, or realistic (unequal wheels, slip, dead zone)",
     )
-    mission.add_argument("--seed", type=int, default=0, help="the simulator's seed (default 0)")
+    mission.add_argument(
+        "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
+    )
     mission.add_argument("--stop-color", help="the LED pattern of the stops (default: RED)")
     mission.add_argument("--out", default="runs/latest", help="folder for the bag, plot, summary")
     mission.add_argument(
         "--no-animation", action="store_true", help="skip mission.gif (a few seconds faster)"
     )
     mission.set_defaults(handler=_mission)
+
+
+def _seed(text: str) -> int:
+    """A seed from the command line: a whole number 0 or more."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"give a whole number 0 or more, not {text!r}")
+    return value
+
+
+def _finite(text: str) -> float:
+    """A number from the command line, refused if it is not finite (nan, inf)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"give a number, not {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"give a finite number, not {text!r}")
+    return value
 
 
 def _plugins() -> List[Callable[[argparse._SubParsersAction], None]]:
@@ -290,7 +386,7 @@ def _parser() -> argparse.ArgumentParser:
     odometry.add_argument(
         "--start",
         nargs=3,
-        type=float,
+        type=_finite,
         metavar=("X", "Y", "THETA"),
         default=TASK_START,
         help="the starting pose, in metres and radians (default: 0.32 0.32 pi/2)",
@@ -304,6 +400,11 @@ def _parser() -> argparse.ArgumentParser:
     odometry.add_argument("--time-base", **time_base)
     odometry.add_argument(
         "--json", action="store_true", help='print {"x": .., "y": .., "theta": ..}'
+    )
+    odometry.add_argument(
+        "--plot",
+        metavar="FIGURE",
+        help="also draw the path and x, y, theta over time to this figure (.png/.svg/.pdf)",
     )
     odometry.set_defaults(handler=_bag_odometry)
 
@@ -325,40 +426,77 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
-@contextlib.contextmanager
-def _noting_ctrl_c(pressed: List[bool]) -> Iterator[None]:
-    """Note each Ctrl-C in ``pressed`` while raising KeyboardInterrupt as usual.
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM (``kill``, a scheduler ending a job), raised as Ctrl-C is, to end as it does."""
 
-    A Ctrl-C that lands inside compiled code (matplotlib drawing a frame) can come out as
-    another error; the note lets the command still end as interrupted.
+
+@contextlib.contextmanager
+def _noting_signals(received: List[int]) -> Iterator[None]:
+    """Note each Ctrl-C (SIGINT) and SIGTERM in ``received``; raise KeyboardInterrupt for both.
+
+    Both end a command the same way: what is under way closes in ``finally`` blocks (a
+    mission's bag is closed whole, its wheels stopped). A Ctrl-C that lands inside compiled
+    code (matplotlib drawing a frame) can come out as another error; the note lets the
+    command still end as interrupted. Only signals left to Python's defaults are taken.
     """
-    handler = signal.getsignal(signal.SIGINT)
-    if threading.current_thread() is not threading.main_thread() or (
-        handler is not signal.default_int_handler
-    ):
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
+    defaults = {signal.SIGINT: signal.default_int_handler, signal.SIGTERM: signal.SIG_DFL}
+    previous = {signum: signal.getsignal(signum) for signum in defaults}
 
-    def on_ctrl_c(signum: int, frame: object) -> None:
-        pressed.append(True)
-        raise KeyboardInterrupt
+    def on_signal(signum: int, frame: object) -> None:
+        received.append(signum)
+        raise _Terminated if signum == signal.SIGTERM else KeyboardInterrupt
 
-    signal.signal(signal.SIGINT, on_ctrl_c)
+    for signum, default in defaults.items():
+        if previous[signum] is default:
+            signal.signal(signum, on_signal)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, handler)
+        for signum, handler in previous.items():
+            if handler is not None:
+                signal.signal(signum, handler)
+
+
+def _stopped(received: List[int]) -> int:
+    """Say that a signal ended the command; the exit status a shell expects for it."""
+    if signal.SIGTERM in received:
+        print("duckie: stopped by SIGTERM (a request to end).", file=sys.stderr)
+        return 128 + signal.SIGTERM
+    print("duckie: interrupted.", file=sys.stderr)
+    return 130
+
+
+#: The library's parameters that are options of ``duckie``, to name in messages.
+_OPTIONS = {"time_base": "--time-base"}
+
+
+def _said(error: BaseException) -> str:
+    """An error's sentence as ``duckie`` prints it: in the command's own words, one full stop.
+
+    The library speaks of its parameters (``time_base='record'``); the command line has
+    options (``--time-base record``). A message that ends with another's sentence may repeat
+    its full stop.
+    """
+    text = re.sub(
+        r"\b(" + "|".join(_OPTIONS) + r")=(['\"]?)([^\s'\"]+)\2",
+        lambda match: f"{_OPTIONS[match[1]]} {match[3].rstrip('.')}",
+        str(error),
+    )
+    return re.sub(r"(?<![./])\.\.(?=\s|$)", ".", text)
 
 
 def main(argv: Optional[List[str]] = None) -> int:
     """Run the ``duckie`` command with ``argv`` (default: the process's arguments)."""
     args = _parser().parse_args(argv)
-    pressed: List[bool] = []
+    received: List[int] = []
     try:
-        with _noting_ctrl_c(pressed):
+        with _noting_signals(received):
             return args.handler(args)
     except DuckielibError as error:
-        print(f"duckie: {error}", file=sys.stderr)
+        print(f"duckie: {_said(error)}", file=sys.stderr)
         return 1
     except BrokenPipeError:
         # The reader went away (`duckie bag info run.bag | head`): that is not an error of
@@ -366,13 +504,11 @@ def main(argv: Optional[List[str]] = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141  # as a shell reports a command ended by SIGPIPE
     except Exception:
-        if not pressed:
+        if not received:
             raise
-        print("duckie: interrupted.", file=sys.stderr)
-        return 130
+        return _stopped(received)
     except KeyboardInterrupt:
-        print("duckie: interrupted.", file=sys.stderr)
-        return 130
+        return _stopped(received)
 
 
 if __name__ == "__main__":

@@ -24,9 +24,12 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import itertools
 import json
 import math
 import os
+import re
+import tempfile
 import time
 import traceback
 from dataclasses import dataclass
@@ -34,7 +37,7 @@ from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
 from duckielib.bags.behaviour import DONE, MissionReport, mission_report
-from duckielib.errors import DuckielibError
+from duckielib.errors import ConfigError, DuckielibError
 from duckielib.missions import Mission, mission_named
 from duckielib.solution import (
     CONTRACT,
@@ -187,14 +190,63 @@ def _crash_message(node: str, error: BaseException) -> Tuple[type, str]:
         )
     last = traceback.extract_tb(error.__traceback__)[-1:] or None
     where = f" (line {last[0].lineno} of {last[0].name})" if last else ""
-    return MissionError, f"The {node} stopped with {type(error).__name__}: {error}{where}."
+    said = " ".join(str(error).split()).rstrip(".")
+    return MissionError, f"The {node} stopped with {type(error).__name__}: {said}{where}."
 
 
-def _clear(folder: Path) -> None:
-    for name in OUTPUTS:
-        for path in (folder / name, folder / (name + ".active")):
-            if path.exists():
-                path.unlink()
+def _prepare_folder(folder: Path) -> None:
+    """Make ``folder`` ready for a run's files: created, writable, an earlier run's removed.
+
+    A bag still being recorded is ``mission.bag.active``; one left there was cut off (its
+    process was killed, or the disk filled up). It is kept under a new name, and a line says
+    where, since its messages can still be recovered.
+
+    Raises:
+        MissionError: if ``folder`` is a file or cannot be created or written to.
+    """
+    if folder.exists() and not folder.is_dir():
+        raise MissionError(
+            f"{folder} is a file, not a folder: choose a folder for the run's files (it is "
+            "created if it does not exist)."
+        )
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        raise MissionError(
+            f"Cannot create the folder {folder} for the run's files ({error.strerror or error}): "
+            "choose a folder you can write to."
+        ) from None
+    try:
+        with tempfile.TemporaryFile(dir=folder):
+            pass  # writing there works
+        cut_off = folder / "mission.bag.active"
+        if cut_off.exists():
+            kept = _unused_name(folder, "unfinished-{}.bag.active")
+            cut_off.replace(kept)
+            print(
+                f"note: {cut_off} is a recording that was cut off before it finished; it is "
+                f"kept as {kept}, and 'duckie bag repair {kept} {kept.with_suffix('')}' "
+                "recovers its messages.",
+                flush=True,
+            )
+        for name in OUTPUTS:
+            for path in (folder / name, folder / (name + ".active")):
+                if path.exists():
+                    path.unlink()
+    except OSError as error:
+        raise MissionError(
+            f"Cannot write the run's files into the folder {folder} ({error.strerror or error}): "
+            "choose a folder you can write to."
+        ) from None
+
+
+def _unused_name(folder: Path, pattern: str) -> Path:
+    """The first ``folder / pattern.format(n)``, n = 1, 2, ..., that does not exist."""
+    return next(
+        path
+        for path in (folder / pattern.format(number) for number in itertools.count(1))
+        if not path.exists()
+    )
 
 
 def run_mission(
@@ -217,7 +269,9 @@ def run_mission(
             ``"d_shape"``).
         noise: the simulator's noise profile, ``"ideal"`` or ``"realistic"``.
         seed: the simulator's seed (same seed and solution, same run).
-        out: the folder to write the files to (created if needed; earlier files replaced).
+        out: the folder to write the files to (created if needed; earlier files replaced,
+            but a recording cut off by a killed run is kept as ``unfinished-N.bag.active``,
+            with a line saying so).
         stop_color: the LED pattern of the stop states, if not the mission's (``"RED"``).
         animation: whether to write ``mission.gif`` (it takes a few seconds).
         time_limit: simulated seconds after which an unfinished mission is stopped.
@@ -227,11 +281,13 @@ def run_mission(
 
     Raises:
         SolutionError: if the solution lacks a part or a part fails (naming the notebook).
-        MissionError: if the mission cannot run to its end.
-        ConfigError: if the mission, noise profile or colour is unknown.
+        MissionError: if the mission cannot run to its end, or ``out`` cannot be written.
+        ConfigError: if the mission, noise profile or colour is unknown, or the seed negative.
     """
     from duckielib.ros.modules import modules_installed
 
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ConfigError(f"The simulator's seed must be a whole number 0 or more, not {seed!r}.")
     chosen = mission_named(mission) if isinstance(mission, str) else mission
     if stop_color is not None:
         chosen = chosen.with_stop_color(stop_color)
@@ -240,8 +296,7 @@ def run_mission(
     with modules_installed(replace_real=True):
         parts = _solution(solution)
     folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
-    _clear(folder)
+    _prepare_folder(folder)
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
     with modules_installed(replace_real=True):
         namespace, simulated, wall, failure = drive_and_record(
@@ -351,12 +406,16 @@ def drive_and_record(
             if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
         ]
         if errors and not ended:
-            said = errors[0].text.splitlines()[-1]
-            crash = (MissionError, f"The {errors[0].node} logged an error: {said}")
+            # The last line of the first traceback, its error's class without its module.
+            said = re.sub(r"^(?:\w+\.)+(?=\w+: )", "", errors[0].text.splitlines()[-1])
+            crash = (MissionError, f"The {errors[0].node} logged an error: {said.rstrip('.')}.")
     except NodeCrashed as error:
         node = error.node.rsplit("/", 1)[-1]
-        cause = error.__cause__ or error
-        crash = _crash_message(node.replace("_", " "), cause)
+        if error.__cause__ is None:  # stopped by the graph itself (code that never waits)
+            said = str(error).split(": ", 1)[-1]
+            crash = (MissionError, f"The {node.replace('_', ' ')} stopped: {said}")
+        else:
+            crash = _crash_message(node.replace("_", " "), error.__cause__)
         ended = False
     finally:
         bot.shutdown()
@@ -391,7 +450,7 @@ def _failure(
     failure: Optional[DuckielibError] = None
     if crash is not None:
         kind, said = crash
-        failure = kind(f"{said} The run's log is in {files['log']}.")
+        failure = kind(f"{said.rstrip('.')}. The run's log is in {files['log']}.")
     elif not ended and _announced_done(files["bag"], namespace):
         failure = MissionError(
             f"The mission node announced '{DONE}' but did not end within {time_limit:.0f} "
