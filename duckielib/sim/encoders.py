@@ -4,7 +4,8 @@ Each wheel has a single-channel optical encoder: a pulse every ``2*pi / resoluti
 of wheel rotation (135 per revolution), whichever way the wheel turns. The driver cannot see
 the direction; it adds or subtracts each pulse by the sign of the last executed wheel command
 (``>= 0`` counts up, ``< 0`` counts down), so a wheel still coasting forward after a reverse
-command already counts down. The count is cumulative since the driver started, starts
+command already counts down. The realistic noise profile keeps that rule; the ideal one counts
+by the way the wheel really turns. The count is cumulative since the driver started, starts
 anywhere, and is published as a signed int32 (it wraps as one).
 
 Each encoder publishes its count on its own timer, ``encoder_rate_hz`` (30 Hz) on average, the
@@ -54,12 +55,15 @@ class Encoder:
         jitter_s: standard deviation of each sample's time error, in seconds.
         rng: the random generator of this encoder (start phase, slot phase, jitter).
         out: the list new readings are appended to.
+        counts_by_command: count each pulse by the sign of the last wheel command, as the
+            real driver does (True), or by the way the wheel turns (False, an ideal encoder).
     """
 
     __slots__ = (
         "_inv_pitch",
         "_jitter_s",
         "_k",
+        "_by_command",
         "_out",
         "_period",
         "_phase",
@@ -81,8 +85,10 @@ class Encoder:
         jitter_s: float,
         rng: np.random.Generator,
         out: List[EncoderReading],
+        counts_by_command: bool = True,
     ) -> None:
         self.wheel = wheel
+        self._by_command = counts_by_command
         self._inv_pitch = resolution / math.tau
         self._period = 1.0 / rate_hz
         self._jitter_s = jitter_s
@@ -98,8 +104,9 @@ class Encoder:
         self.next_time = self._phase
 
     def set_direction(self, duty: float) -> None:
-        """Take the counting direction from an executed duty cycle."""
-        self.direction = 1 if duty >= 0 else -1
+        """Take the counting direction from an executed duty cycle (if it counts by command)."""
+        if self._by_command:
+            self.direction = 1 if duty >= 0 else -1
 
     @property
     def ticks(self) -> int:
@@ -112,6 +119,8 @@ class Encoder:
         Samples due in ``(t0, t0 + dt]`` are appended to the output list with the count at
         their own time (the wheel turns at a constant rate within a step).
         """
+        if not self._by_command and speed:
+            self.direction = 1 if speed > 0 else -1
         angle0 = self.angle
         angle1 = angle0 + speed * dt
         slot1 = math.floor(angle1 * self._inv_pitch)

@@ -22,9 +22,12 @@ Every parameter can be set on its own, starting from either profile::
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
+import os
 from dataclasses import dataclass
-from typing import Optional, Union
+from pathlib import Path
+from typing import Any, Dict, Optional, Tuple, Union
 
 from duckielib.errors import ConfigError
 
@@ -46,6 +49,17 @@ class NoiseProfile:
             seconds (samples are due every 1 / encoder_rate_hz on average).
         breakaway_pwm: PWM (of 255) a wheel at rest needs before it starts turning (static
             friction in the gearbox); None means the driver's smallest PWM is enough.
+        speed_curve: a motor's steady wheel speed against its duty cycle, as knots
+            ``((duty, rad/s), ...)`` with rising duties in (0, 1] and speeds >= 0: linear
+            between knots, 0 below the first knot (the motor's dead band), flat after the last.
+            None: the driver's linear law, ``k`` rad/s at duty 1 (:class:`RobotConfig`).
+        wheel_radius_scale: the wheels' true radius over the nominal one that odometry uses.
+        baseline_scale: the true distance between the wheels' contact points over the nominal
+            baseline that odometry uses.
+        encoder_counts_by_command: True for the real encoder driver's rule, counting each pulse
+            up or down by the sign of the last wheel command (so a wheel still coasting
+            forward after a reverse command counts down); False counts by the way the wheel
+            really turns.
     """
 
     name: str = "custom"
@@ -54,6 +68,10 @@ class NoiseProfile:
     friction_coefficient: Optional[float] = None
     encoder_jitter_s: float = 0.0
     breakaway_pwm: Optional[int] = None
+    speed_curve: Optional[Tuple[Tuple[float, float], ...]] = None
+    wheel_radius_scale: float = 1.0
+    baseline_scale: float = 1.0
+    encoder_counts_by_command: bool = False
 
     def __post_init__(self) -> None:
         for field in ("left_gain", "right_gain"):
@@ -77,6 +95,19 @@ class NoiseProfile:
                 f"NoiseProfile.breakaway_pwm must be an integer PWM in [0, 255] or None, "
                 f"not {pwm!r}."
             )
+        for field in ("wheel_radius_scale", "baseline_scale"):
+            value = getattr(self, field)
+            if not (_is_number(value) and 0.5 <= value <= 2.0):
+                raise ConfigError(
+                    f"NoiseProfile.{field} must be a number between 0.5 and 2, not {value!r}."
+                )
+        if not isinstance(self.encoder_counts_by_command, bool):
+            raise ConfigError(
+                "NoiseProfile.encoder_counts_by_command must be True or False, "
+                f"not {self.encoder_counts_by_command!r}."
+            )
+        if self.speed_curve is not None:
+            object.__setattr__(self, "speed_curve", _check_curve(self.speed_curve))
 
     @classmethod
     def ideal(cls, **changes: object) -> NoiseProfile:
@@ -93,8 +124,53 @@ class NoiseProfile:
             friction_coefficient=0.8,
             encoder_jitter_s=0.002,
             breakaway_pwm=68,
+            encoder_counts_by_command=True,
         )
         return profile.replace(**changes)
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The parameters that differ from the ideal profile's, and the name, for JSON."""
+        ideal = NoiseProfile()
+        data: Dict[str, Any] = {"name": self.name}
+        for item in dataclasses.fields(self):
+            value = getattr(self, item.name)
+            if item.name != "name" and value != getattr(ideal, item.name):
+                data[item.name] = (
+                    [list(knot) for knot in value] if item.name == "speed_curve" else value
+                )
+        return data
+
+    def save(self, path: Union[str, os.PathLike]) -> Path:
+        """Write the profile to a JSON file (a reader never sees half of it); return its path."""
+        target = Path(path)
+        partial = target.with_name(target.name + ".partial")
+        partial.write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+        partial.replace(target)
+        return target
+
+    @classmethod
+    def load(cls, path: Union[str, os.PathLike]) -> NoiseProfile:
+        """The profile a JSON file holds (see :meth:`save`).
+
+        Raises:
+            ConfigError: if the file is missing, is not JSON, or holds an impossible profile.
+        """
+        target = Path(path)
+        try:
+            data = json.loads(target.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise ConfigError(f"There is no noise profile file {target}.") from None
+        except (OSError, UnicodeDecodeError, ValueError) as error:
+            raise ConfigError(f"The noise profile file {target} is not JSON: {error}") from None
+        if not isinstance(data, dict):
+            raise ConfigError(
+                f"The noise profile file {target} must hold a JSON object of parameters."
+            )
+        data.setdefault("name", target.stem)
+        try:
+            return cls().replace(**data)
+        except ConfigError as error:
+            raise ConfigError(f"In {target}: {error}") from None
 
     def replace(self, **changes: object) -> NoiseProfile:
         """A copy with some parameters changed (its name becomes ``"custom"`` unless given).
@@ -115,11 +191,37 @@ class NoiseProfile:
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 
-def noise_profile(profile: Union[str, NoiseProfile]) -> NoiseProfile:
-    """The profile itself, or the named one (``"ideal"`` or ``"realistic"``).
+def _check_curve(curve: object) -> Tuple[Tuple[float, float], ...]:
+    """The speed curve as a tuple of float pairs, or a ConfigError saying what is wrong."""
+    try:
+        knots = tuple((float(duty), float(speed)) for duty, speed in curve)  # type: ignore[attr-defined]
+    except (TypeError, ValueError):
+        knots = ()
+    duties = [duty for duty, _ in knots]
+    fine = (
+        bool(knots)
+        and all(math.isfinite(duty) and math.isfinite(speed) for duty, speed in knots)
+        and all(0 < duty <= 1 for duty in duties)
+        and all(speed >= 0 for _, speed in knots)
+        and all(a < b for a, b in zip(duties, duties[1:]))
+        and any(speed > 0 for _, speed in knots)
+    )
+    if not fine:
+        raise ConfigError(
+            "NoiseProfile.speed_curve must be knots ((duty, rad/s), ...) with rising duties in "
+            f"(0, 1], speeds >= 0 and one above 0, not {curve!r}."
+        )
+    return knots
+
+
+def noise_profile(profile: Union[str, os.PathLike, NoiseProfile]) -> NoiseProfile:
+    """The profile itself, the named one (``"ideal"`` or ``"realistic"``), or a profile file.
+
+    A profile file is JSON, as :meth:`NoiseProfile.save` writes it (and ``duckie calibrate``):
+    an object of the parameters that differ from the ideal profile's.
 
     Raises:
-        ConfigError: if the name is not one of the named profiles.
+        ConfigError: if the name is not one of the named profiles nor a readable profile file.
     """
     if isinstance(profile, NoiseProfile):
         return profile
@@ -127,8 +229,12 @@ def noise_profile(profile: Union[str, NoiseProfile]) -> NoiseProfile:
         return NoiseProfile.ideal()
     if profile == "realistic":
         return NoiseProfile.realistic()
+    path = Path(profile)
+    if path.suffix == ".json" or path.is_file():
+        return NoiseProfile.load(path)
     raise ConfigError(
-        f"There is no noise profile called {profile!r}; use 'ideal', 'realistic' or a NoiseProfile."
+        f"There is no noise profile called {str(profile)!r}; use 'ideal', 'realistic', a profile "
+        "file (robot.json) or a NoiseProfile."
     )
 
 

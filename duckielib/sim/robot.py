@@ -22,9 +22,10 @@ applies.
 
 from __future__ import annotations
 
+import bisect
 import functools
 import math
-from typing import Callable, NamedTuple, Tuple
+from typing import Callable, NamedTuple, Optional, Sequence, Tuple
 
 import pymunk
 
@@ -38,6 +39,7 @@ __all__ = [
     "Motor",
     "Robot",
     "pwm_from_duty",
+    "steady_speed",
     "MOTOR_TIME_CONSTANT_S",
     "WHEEL_LOAD_FRACTION",
     "GRAVITY",
@@ -127,6 +129,21 @@ def pwm_from_duty(duty: float, config: RobotConfig) -> int:
     return math.floor(magnitude * (config.pwm_max - config.pwm_min) + config.pwm_min)
 
 
+def steady_speed(curve: Sequence[Tuple[float, float]], duty: float) -> float:
+    """A motor's steady wheel speed (rad/s) for a duty cycle's magnitude, from its speed curve.
+
+    Linear between the curve's knots, 0 below the first (the dead band), flat after the last.
+    """
+    duties = [knot[0] for knot in curve]
+    if duty < duties[0]:
+        return 0.0
+    index = bisect.bisect_right(duties, duty)
+    if index == len(curve):
+        return curve[-1][1]
+    (d0, s0), (d1, s1) = curve[index - 1], curve[index]
+    return s0 + (s1 - s0) * (duty - d0) / (d1 - d0)
+
+
 class Motor:
     """One wheel's motor: duty cycle in, wheel angular speed out.
 
@@ -136,11 +153,31 @@ class Motor:
         speed: the wheel's angular speed, in rad/s (positive drives the robot forward).
     """
 
-    __slots__ = ("_alpha", "_breakaway", "_drive", "_full_scale", "config", "duty", "pwm", "speed")
+    __slots__ = (
+        "_alpha",
+        "_breakaway",
+        "_curve",
+        "_drive",
+        "_full_scale",
+        "_gain",
+        "config",
+        "duty",
+        "pwm",
+        "speed",
+    )
 
-    def __init__(self, config: RobotConfig, gain: float, breakaway_pwm: int, alpha: float) -> None:
+    def __init__(
+        self,
+        config: RobotConfig,
+        gain: float,
+        breakaway_pwm: int,
+        alpha: float,
+        curve: Optional[Tuple[Tuple[float, float], ...]] = None,
+    ) -> None:
         self.config = config
         self._full_scale = config.k * gain
+        self._gain = gain
+        self._curve = curve
         self._breakaway = breakaway_pwm
         self._alpha = alpha
         self._drive = 0.0
@@ -157,6 +194,8 @@ class Motor:
         self.pwm = pwm
         if pwm == 0:
             self._drive = 0.0
+        elif self._curve is not None:
+            self._drive = math.copysign(self._gain * steady_speed(self._curve, abs(duty)), duty)
         else:
             fraction = (pwm - config.pwm_min) / (config.pwm_max - config.pwm_min)
             self._drive = math.copysign(self._full_scale * fraction, duty)
@@ -220,12 +259,13 @@ class Robot:
         mu = NO_SLIP_FRICTION if mu is None else mu
         self.traction_limit = mu * config.mass * GRAVITY * WHEEL_LOAD_FRACTION / 2.0
         self.grounds = []
+        #: The wheels' true radius and half the true distance between their contact points.
+        self.radius = config.radius * noise.wheel_radius_scale
+        half_track = config.baseline * noise.baseline_scale / 2
         for side in (1.0, -1.0):
             ground = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
-            ground.position = self.body.local_to_world((0.0, side * config.baseline / 2))
-            joint = pymunk.PivotJoint(
-                ground, self.body, (0.0, 0.0), (0.0, side * config.baseline / 2)
-            )
+            ground.position = self.body.local_to_world((0.0, side * half_track))
+            joint = pymunk.PivotJoint(ground, self.body, (0.0, 0.0), (0.0, side * half_track))
             joint.max_bias = 0.0
             joint.max_force = self.traction_limit
             space.add(ground, joint)
@@ -235,8 +275,9 @@ class Robot:
 
         alpha = 1.0 if motor_time_constant_s == 0 else -math.expm1(-dt / motor_time_constant_s)
         breakaway = config.pwm_min if noise.breakaway_pwm is None else noise.breakaway_pwm
-        self.left = Motor(config, noise.left_gain, breakaway, alpha)
-        self.right = Motor(config, noise.right_gain, breakaway, alpha)
+        curve = noise.speed_curve
+        self.left = Motor(config, noise.left_gain, breakaway, alpha, curve)
+        self.right = Motor(config, noise.right_gain, breakaway, alpha, curve)
 
     def drive(self) -> Tuple[float, float]:
         """Advance both motors by one step and aim the tyres; return the wheel speeds in rad/s.
@@ -256,7 +297,7 @@ class Robot:
         # belong to one rigid motion, which the solver meets exactly below the friction cap.
         anchor_heading = body.angle + omega * self.dt
         mid_heading = anchor_heading + 0.5 * omega * self.dt
-        radius = self.config.radius
+        radius = self.radius
         common = 0.5 * radius * (left + right)
         differential = 0.5 * radius * (right - left)
         common_x = common * math.cos(mid_heading)

@@ -206,11 +206,26 @@ class Simulator:
         self._readings: List[EncoderReading] = []
         rate = config.encoder_rate_hz
         jitter = self.noise.encoder_jitter_s
+        by_command = self.noise.encoder_counts_by_command
         self.left_encoder = Encoder(
-            "left", config.resolution, rate, initial_ticks[0], jitter, left_rng, self._readings
+            "left",
+            config.resolution,
+            rate,
+            initial_ticks[0],
+            jitter,
+            left_rng,
+            self._readings,
+            by_command,
         )
         self.right_encoder = Encoder(
-            "right", config.resolution, rate, initial_ticks[1], jitter, right_rng, self._readings
+            "right",
+            config.resolution,
+            rate,
+            initial_ticks[1],
+            jitter,
+            right_rng,
+            self._readings,
+            by_command,
         )
         # Wheel speeds the chassis moves with during the coming step, in rad/s.
         self._applied = (0.0, 0.0)

@@ -121,9 +121,13 @@ def test_driving_backwards_counts_down_and_goes_negative():
     assert sim.pose.x < 1.3
 
 
+#: The real encoder driver's counting rule, on otherwise ideal wheels.
+BY_COMMAND = NoiseProfile.ideal(encoder_counts_by_command=True)
+
+
 def test_coasting_after_a_reverse_command_counts_by_the_last_commands_sign():
     """The driver counts up for a command >= 0, whatever way the wheel really turns."""
-    sim = Simulator(seed=5, world=BIG, start_pose=(2.0, 2.0, 0.0))
+    sim = Simulator(seed=5, world=BIG, start_pose=(2.0, 2.0, 0.0), noise=BY_COMMAND)
     sim.set_wheel_duties(-0.8, -0.8)
     sim.run_until(1.0)
     before = sim.encoder_ticks
@@ -137,7 +141,7 @@ def test_coasting_after_a_reverse_command_counts_by_the_last_commands_sign():
 
 
 def test_a_reverse_command_counts_down_while_the_wheel_still_turns_forward():
-    sim = Simulator(seed=5, world=BIG, start_pose=(2.0, 2.0, 0.0))
+    sim = Simulator(seed=5, world=BIG, start_pose=(2.0, 2.0, 0.0), noise=BY_COMMAND)
     sim.set_wheel_duties(0.8, 0.8)
     sim.run_until(1.0)
     before = sim.encoder_ticks
@@ -145,6 +149,21 @@ def test_a_reverse_command_counts_down_while_the_wheel_still_turns_forward():
     sim.step(0.03)
     assert all(speed > 5.0 for speed in sim.wheel_speeds)  # still turning forwards
     assert all(now < then for now, then in zip(sim.encoder_ticks, before))
+
+
+def test_the_realistic_profile_keeps_the_drivers_rule_and_the_ideal_one_counts_true_turns():
+    assert NoiseProfile.realistic().encoder_counts_by_command
+    ideal = Simulator(seed=5, world=BIG, start_pose=(2.0, 2.0, 0.0), noise="ideal")
+    ideal.set_wheel_duties(0.8, 0.8)
+    ideal.run_until(1.0)
+    before = ideal.encoder_ticks
+    angle_before = ideal.left_encoder.angle
+    ideal.set_wheel_duties(-0.1, -0.1)  # the wheels coast forward, then turn back
+    ideal.run_until(1.5)
+    turned = (ideal.left_encoder.angle - angle_before) * DB21.resolution / math.tau
+    counted = ideal.encoder_ticks[0] - before[0]
+    assert turned > 5  # forward on balance
+    assert abs(counted - turned) <= 1  # the count follows the wheel, up to one slot
 
 
 def test_counts_wrap_as_int32():
