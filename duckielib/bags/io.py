@@ -450,6 +450,7 @@ class Bag:
 
     def __init__(self, path: PathLike) -> None:
         self.path = Path(path)
+        self._checked: Optional[Tuple[str]] = None  # what check() found, once it has run
         if not self.path.exists():
             raise BagError(f"There is no file {self.path}.")
         if not self.path.is_file():
@@ -548,11 +549,15 @@ class Bag:
             None for a sound bag, else sentences saying where the damage is, how many
             messages it affects, and how to recover them.
         """
-        scan = records.scan(self.path, lambda connection: False, check_index=True)
-        counted = self._counted(scan, list(self.topics))
-        if not scan.damages and not any(read != listed for _, read, listed in counted):
-            return None
-        return f"{self._damaged_sentence(scan, counted)} {_repair_advice(self.path)}."
+        if self._checked is None:
+            scan = records.scan(self.path, lambda connection: False, check_index=True)
+            counted = self._counted(scan, list(self.topics))
+            if not scan.damages and not any(read != listed for _, read, listed in counted):
+                self._checked = ("",)
+            else:
+                sentence = f"{self._damaged_sentence(scan, counted)} {_repair_advice(self.path)}."
+                self._checked = (sentence,)
+        return self._checked[0] or None
 
     def info(self, check: bool = True) -> str:
         """A summary like ``rosbag info``: path, duration, times, size, types and topics.

@@ -48,6 +48,24 @@ def test_info(encoders):
     result = duckie("info", encoders)
     assert result.returncode == 0
     assert "messages:    180" in result.stdout
+    assert "damage:" not in result.stdout
+
+
+def test_info_on_a_bag_damaged_in_the_middle_says_where_and_exits_1(encoders, tmp_path):
+    damaged = tmp_path / "mid.bag"
+    data = bytearray(encoders.read_bytes())
+    middle = len(data) // 2
+    data[middle : middle + 64] = bytes(b ^ 0xFF for b in data[middle : middle + 64])
+    damaged.write_bytes(bytes(data))
+    result = duckie("info", damaged)
+    assert result.returncode == 1
+    assert "messages:    180" in result.stdout  # what the index lists...
+    damage = result.stdout.split("damage:", 1)[1]
+    assert "mid.bag is damaged in chunk" in " ".join(damage.split())  # ...and what is wrong
+    assert "duckie bag repair" in " ".join(damage.split())
+    quick = duckie("info", "--no-check", damaged)  # the index only, as rosbag info reads it
+    assert quick.returncode == 0
+    assert "damage:" not in quick.stdout
 
 
 def test_odometry_prints_the_final_pose_and_json(encoders):
