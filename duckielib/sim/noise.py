@@ -53,6 +53,8 @@ class NoiseProfile:
             ``((duty, rad/s), ...)`` with rising duties in (0, 1] and speeds >= 0: linear
             between knots, 0 below the first knot (the motor's dead band), flat after the last.
             None: the driver's linear law, ``k`` rad/s at duty 1 (:class:`RobotConfig`).
+        right_speed_curve: the right motor's own speed curve, when it differs from the left's
+            (``duckie calibrate`` fits one per wheel); None: ``speed_curve`` for both.
         wheel_radius_scale: the wheels' true radius over the nominal one that odometry uses.
         baseline_scale: the true distance between the wheels' contact points over the nominal
             baseline that odometry uses.
@@ -69,6 +71,7 @@ class NoiseProfile:
     encoder_jitter_s: float = 0.0
     breakaway_pwm: Optional[int] = None
     speed_curve: Optional[Tuple[Tuple[float, float], ...]] = None
+    right_speed_curve: Optional[Tuple[Tuple[float, float], ...]] = None
     wheel_radius_scale: float = 1.0
     baseline_scale: float = 1.0
     encoder_counts_by_command: bool = False
@@ -106,8 +109,9 @@ class NoiseProfile:
                 "NoiseProfile.encoder_counts_by_command must be True or False, "
                 f"not {self.encoder_counts_by_command!r}."
             )
-        if self.speed_curve is not None:
-            object.__setattr__(self, "speed_curve", _check_curve(self.speed_curve))
+        for field in ("speed_curve", "right_speed_curve"):
+            if getattr(self, field) is not None:
+                object.__setattr__(self, field, _check_curve(getattr(self, field), field))
 
     @classmethod
     def ideal(cls, **changes: object) -> NoiseProfile:
@@ -135,9 +139,8 @@ class NoiseProfile:
         for item in dataclasses.fields(self):
             value = getattr(self, item.name)
             if item.name != "name" and value != getattr(ideal, item.name):
-                data[item.name] = (
-                    [list(knot) for knot in value] if item.name == "speed_curve" else value
-                )
+                curve = item.name.endswith("speed_curve")
+                data[item.name] = [list(knot) for knot in value] if curve else value
         return data
 
     def save(self, path: Union[str, os.PathLike]) -> Path:
@@ -191,7 +194,7 @@ class NoiseProfile:
         return dataclasses.replace(self, **changes)  # type: ignore[arg-type]
 
 
-def _check_curve(curve: object) -> Tuple[Tuple[float, float], ...]:
+def _check_curve(curve: object, field: str) -> Tuple[Tuple[float, float], ...]:
     """The speed curve as a tuple of float pairs, or a ConfigError saying what is wrong."""
     try:
         knots = tuple((float(duty), float(speed)) for duty, speed in curve)  # type: ignore[attr-defined]
@@ -208,7 +211,7 @@ def _check_curve(curve: object) -> Tuple[Tuple[float, float], ...]:
     )
     if not fine:
         raise ConfigError(
-            "NoiseProfile.speed_curve must be knots ((duty, rad/s), ...) with rising duties in "
+            f"NoiseProfile.{field} must be knots ((duty, rad/s), ...) with rising duties in "
             f"(0, 1], speeds >= 0 and one above 0, not {curve!r}."
         )
     return knots

@@ -276,8 +276,9 @@ class Robot:
         alpha = 1.0 if motor_time_constant_s == 0 else -math.expm1(-dt / motor_time_constant_s)
         breakaway = config.pwm_min if noise.breakaway_pwm is None else noise.breakaway_pwm
         curve = noise.speed_curve
+        right_curve = curve if noise.right_speed_curve is None else noise.right_speed_curve
         self.left = Motor(config, noise.left_gain, breakaway, alpha, curve)
-        self.right = Motor(config, noise.right_gain, breakaway, alpha, curve)
+        self.right = Motor(config, noise.right_gain, breakaway, alpha, right_curve)
 
     def drive(self) -> Tuple[float, float]:
         """Advance both motors by one step and aim the tyres; return the wheel speeds in rad/s.

@@ -296,8 +296,9 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
     mission.add_argument(
         "--noise",
         default="ideal",
-        choices=("ideal", "realistic"),
-        help="the simulated robot: ideal, or realistic (unequal wheels, slip, dead zone)",
+        type=_noise,
+        help="the simulated robot: ideal, realistic (unequal wheels, slip, dead zone), or a "
+        "profile file that duckie calibrate wrote (robot.json)",
     )
     mission.add_argument(
         "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
@@ -308,6 +309,94 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         "--no-animation", action="store_true", help="skip mission.gif (a few seconds faster)"
     )
     mission.set_defaults(handler=_mission)
+
+
+def _noise(text: str) -> str:
+    """A noise profile from the command line: ``ideal``, ``realistic`` or a profile file."""
+    if text in ("ideal", "realistic") or text.endswith(".json"):
+        return text
+    raise argparse.ArgumentTypeError(
+        f"give ideal, realistic or a profile file (robot.json), not {text!r}"
+    )
+
+
+def _add_simulator(commands: argparse._SubParsersAction) -> None:
+    """``duckie calibrate`` and ``duckie sim replay``: the simulator against a real robot."""
+    calibrate = commands.add_parser(
+        "calibrate",
+        help="fit the simulated motors to your robot, from a bag of its wheel commands and ticks",
+    )
+    calibrate.add_argument(
+        "bag", help="a bag with wheels_driver_node/wheels_cmd and both encoders' ticks"
+    )
+    calibrate.add_argument("-o", "--out", help="write the fitted profile to this file (.json)")
+    calibrate.add_argument("--name", help="the profile's name (default: the file's name)")
+    _add_replay_topics(calibrate)
+    calibrate.add_argument("--json", action="store_true", help="print the figures as JSON")
+    calibrate.set_defaults(handler=_calibrate)
+
+    sim = commands.add_parser("sim", help="the simulator against a real robot's bag")
+    sim_commands = sim.add_subparsers(dest="sim_command", metavar="SIM_COMMAND", required=True)
+    replay = sim_commands.add_parser(
+        "replay",
+        help="replay a bag's wheel commands into the simulator and compare the ticks",
+    )
+    replay.add_argument(
+        "bag", help="a bag with wheels_driver_node/wheels_cmd and both encoders' ticks"
+    )
+    replay.add_argument(
+        "--noise",
+        default="realistic",
+        type=_noise,
+        help="the simulated robot: ideal, realistic (default) or a profile file (robot.json)",
+    )
+    replay.add_argument("--seed", type=_seed, default=0, help="the simulator's seed (default 0)")
+    _add_replay_topics(replay)
+    replay.add_argument("--json", action="store_true", help="print the figures as JSON")
+    replay.set_defaults(handler=_sim_replay)
+
+
+def _add_replay_topics(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--commands", help="the wheel commands' topic (default: found by type and name)"
+    )
+    parser.add_argument("--left", help="the left encoder's topic (default: found by name)")
+    parser.add_argument("--right", help="the right encoder's topic (default: found by name)")
+
+
+def _print_figures(figures: Dict[str, Any], as_json: bool) -> None:
+    if as_json:
+        import json
+
+        print(json.dumps(figures, indent=2))
+    else:
+        for name, value in figures.items():
+            print(f"{name}: {value}")
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from duckielib.sim.calibrate import calibrate_bag
+
+    name = args.name or (Path(args.out).stem if args.out else "calibrated")
+    calibration = calibrate_bag(args.bag, name, args.commands, args.left, args.right)
+    _print_figures(calibration.figures(), args.json)
+    if args.out:
+        path = calibration.profile.save(args.out)
+        if not args.json:
+            print(f"wrote {path}: use it with duckie mission --noise {path}")
+    elif not args.json:
+        print("(write the profile to a file with -o robot.json)")
+    return 0
+
+
+def _sim_replay(args: argparse.Namespace) -> int:
+    from duckielib.sim.replay import replay_bag
+
+    report = replay_bag(args.bag, args.noise, args.seed, args.commands, args.left, args.right)
+    _print_figures(report.figures(), args.json)
+    return 0
 
 
 def _seed(text: str) -> int:
@@ -426,6 +515,7 @@ def _parser() -> argparse.ArgumentParser:
     repair.set_defaults(handler=_bag_repair)
 
     _add_robot(commands)
+    _add_simulator(commands)
 
     for add_commands in _plugins():
         add_commands(commands)

@@ -1,0 +1,267 @@
+"""Replay a bag's wheel commands into the simulator and compare its ticks with the bag's.
+
+A bag recorded on a robot (or in the simulator) that holds the wheel commands
+(``wheels_driver_node/wheels_cmd``, duckietown_msgs/WheelsCmdStamped) and both encoders' ticks
+says how far each command really turned each wheel. :func:`replay_bag` sends the same commands,
+at the same times from the bag's first command, to a simulated robot with a noise profile, and
+reads its encoders at the times the bag's encoders were read. The comparison, per wheel:
+
+- ``travel``: how many ticks the wheel turned in all (forward and back both count);
+- ``travel_ratio``: simulated over real travel (1 when the profile is right);
+- ``tick_rate_rms``: the root mean square, over consecutive 1 s windows, of the difference
+  between the simulated and the real tick rate, in ticks per second.
+
+``duckie sim replay BAG`` prints them; ``duckie calibrate`` fits a profile that brings them
+close to 1 and 0.
+
+Laptop side; never deployed.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from typing import Dict, Optional, Tuple, Union
+
+import numpy as np
+
+from duckielib.bags import Bag, read_encoders, read_topic
+from duckielib.bags.analysis import EncoderStream
+from duckielib.errors import BagError
+from duckielib.sim.noise import NoiseProfile, noise_profile
+from duckielib.sim.simulator import Simulator
+from duckielib.sim.world import World
+
+__all__ = ["Commands", "ReplayReport", "WheelReplay", "replay_bag", "wheel_commands"]
+
+#: The wheel commands' type, and the topics that carry them (the first found is used).
+COMMAND_TYPE = "duckietown_msgs/WheelsCmdStamped"
+_COMMAND_TOPICS = ("wheels_driver_node/wheels_cmd", "wheels_driver_node/wheels_cmd_executed")
+#: A mat large enough that a replayed run never meets a wall.
+_OPEN_FLOOR = World(tiles_x=60, tiles_y=60)
+#: How long after the last command the wheels are still compared (they coast to a stop).
+_COAST_S = 1.0
+#: The length of the windows whose tick rates are compared, in seconds.
+WINDOW_S = 1.0
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+@dataclass(frozen=True)
+class Commands:
+    """A bag's wheel commands, in order.
+
+    Attributes:
+        topic: the topic they came from.
+        t: their record times (when the driver received them), in seconds.
+        left: the left wheel's duty cycles.
+        right: the right wheel's duty cycles.
+    """
+
+    topic: str
+    t: np.ndarray
+    left: np.ndarray
+    right: np.ndarray
+
+
+@dataclass(frozen=True)
+class WheelReplay:
+    """One wheel, real against simulated.
+
+    Attributes:
+        wheel: ``"left"`` or ``"right"``.
+        real_travel: the ticks the real wheel turned, in all.
+        sim_travel: the ticks the simulated wheel turned, in all.
+        travel_ratio: ``sim_travel / real_travel`` (NaN if the real wheel never turned).
+        tick_rate_rms: the 1 s tick-rate error, in ticks per second.
+    """
+
+    wheel: str
+    real_travel: int
+    sim_travel: int
+    travel_ratio: float
+    tick_rate_rms: float
+
+
+@dataclass(frozen=True)
+class ReplayReport:
+    """What a replay found, wheel by wheel, and the whole run's figures.
+
+    Attributes:
+        bag: the bag's file name.
+        noise: the noise profile's name.
+        commands: how many commands were replayed, and from which topic.
+        duration: the seconds compared, from the first command.
+        left, right: each wheel's comparison.
+        tick_rate_rms: the 1 s tick-rate error over both wheels, in ticks per second.
+        real_ticks, sim_ticks: each wheel's counts at the compared times, from 0 (for plots).
+        t: those times, in seconds from the first command.
+    """
+
+    bag: str
+    noise: str
+    commands: int
+    command_topic: str
+    duration: float
+    left: WheelReplay
+    right: WheelReplay
+    tick_rate_rms: float
+    t: np.ndarray
+    real_ticks: Tuple[np.ndarray, np.ndarray]
+    sim_ticks: Tuple[np.ndarray, np.ndarray]
+
+    def figures(self) -> Dict[str, Union[str, int, float]]:
+        """The report as ``name: value`` pairs (what ``duckie sim replay`` prints)."""
+        figures: Dict[str, Union[str, int, float]] = {
+            "bag": self.bag,
+            "noise": self.noise,
+            "commands": self.commands,
+            "command_topic": self.command_topic,
+            "duration_s": round(self.duration, 3),
+        }
+        for side in (self.left, self.right):
+            figures[f"real_travel_{side.wheel}"] = side.real_travel
+            figures[f"sim_travel_{side.wheel}"] = side.sim_travel
+            figures[f"travel_ratio_{side.wheel}"] = round(side.travel_ratio, 4)
+            figures[f"tick_rate_rms_{side.wheel}"] = round(side.tick_rate_rms, 3)
+        figures["tick_rate_rms"] = round(self.tick_rate_rms, 3)
+        return figures
+
+
+def wheel_commands(bag: Union[Bag, PathLike], topic: Optional[str] = None) -> Commands:
+    """The wheel commands a bag holds (``wheels_driver_node/wheels_cmd`` by preference).
+
+    Raises:
+        BagError: if the bag holds no wheel commands, or ``topic`` is not a topic of them.
+    """
+    bag = bag if isinstance(bag, Bag) else Bag(bag)
+    found = bag.topics_of_type(COMMAND_TYPE)
+    if topic is None:
+        for ending in _COMMAND_TOPICS:
+            topic = next((name for name in found if name.endswith(ending)), None)
+            if topic is not None:
+                break
+        else:
+            topic = found[0] if found else None
+    if topic is None or topic not in found:
+        what = f"{topic} is not a topic of them" if topic else "it has none"
+        raise BagError(
+            f"{bag.path.name} needs the wheel commands ({COMMAND_TYPE} on "
+            f"wheels_driver_node/wheels_cmd) to be replayed, but {what}. Record that topic "
+            "together with both wheels' encoder ticks."
+        )
+    arrays = read_topic(bag, topic, time_base="record")  # when the driver got each one
+    if len(arrays) == 0:
+        raise BagError(f"{topic} in {bag.path.name} holds no command to replay.")
+    return Commands(topic, arrays.t, arrays["vel_left"], arrays["vel_right"])
+
+
+def _travel(ticks: np.ndarray) -> int:
+    return int(np.abs(np.diff(ticks)).sum()) if len(ticks) > 1 else 0
+
+
+def _rate_error(t: np.ndarray, real: np.ndarray, sim: np.ndarray) -> np.ndarray:
+    """Simulated minus real tick rate in each whole 1 s window, in ticks per second."""
+    if len(t) < 2 or t[-1] - t[0] < WINDOW_S:
+        return np.array([])
+    edges = np.arange(t[0], t[-1] + 1e-9, WINDOW_S)
+    real_at = np.interp(edges, t, real)
+    sim_at = np.interp(edges, t, sim)
+    return (np.diff(sim_at) - np.diff(real_at)) / WINDOW_S
+
+
+def _rms(values: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(values**2))) if len(values) else 0.0
+
+
+def replay_bag(
+    bag: Union[Bag, PathLike],
+    noise: Union[str, NoiseProfile] = "realistic",
+    seed: int = 0,
+    command_topic: Optional[str] = None,
+    left_topic: Optional[str] = None,
+    right_topic: Optional[str] = None,
+) -> ReplayReport:
+    """Replay a bag's wheel commands into the simulator and compare the ticks (module doc).
+
+    Args:
+        bag: a :class:`~duckielib.bags.Bag` or a bag's path.
+        noise: the simulated robot's noise profile: a name, a profile file or a profile.
+        seed: the simulator's seed.
+        command_topic: the wheel commands' topic (default: found by type and name).
+        left_topic: the left encoder's topic (default: found by name).
+        right_topic: the right encoder's topic (default: found by name).
+
+    Raises:
+        BagError: if the bag lacks the commands or the encoders, or they do not overlap.
+    """
+    bag = bag if isinstance(bag, Bag) else Bag(bag)
+    profile = noise_profile(noise)
+    commands = wheel_commands(bag, command_topic)
+    streams = read_encoders(bag, left_topic, right_topic)
+    start = float(commands.t[0])
+    end = min(float(commands.t[-1]) + _COAST_S, *(float(s.t[-1]) for s in streams))
+    kept = [_within(stream, start, end) for stream in streams]
+    # The simulated robot is switched on when the bag starts, and stands still until the
+    # first command: a bag of the simulator replays on its own clock, reading for reading.
+    # (To the millisecond: a bag written here starts at 1 ns, ROS's smallest valid time.)
+    origin = min(start, math.floor(bag.start_ns / 1e6) / 1e3)
+    if any(len(t) < 2 for t, _ in kept):
+        raise BagError(
+            f"{bag.path.name} has fewer than two encoder readings of a wheel while its wheel "
+            "commands run: record the encoders and the commands at the same time."
+        )
+    sim = Simulator(
+        seed=seed,
+        noise=profile,
+        world=_OPEN_FLOOR,
+        start_pose=(_OPEN_FLOOR.width / 2, _OPEN_FLOOR.height / 2, 0.0),
+        trace_rate_hz=0,
+    )
+    readings = []
+    for when, left, right in zip(commands.t - origin, commands.left, commands.right):
+        sim.run_until(when)
+        sim.set_wheel_duties(float(left), float(right))
+        readings += sim.pop_encoder_readings()
+    sim.run_until(end - origin)
+    readings += sim.pop_encoder_readings()
+    # The simulated encoders' own readings, each read at the bag's reading times (the last
+    # one at or before each): with the bag's own seed and profile, the very same counts.
+    sampled = []
+    for wheel, (t, _) in zip(("left", "right"), kept):
+        own = [(r.time, r.ticks) for r in readings if r.wheel == wheel]
+        own_t = np.array([0.0] + [time for time, _ in own])
+        own_ticks = np.array([own[0][1] if own else 0] + [ticks for _, ticks in own], np.int64)
+        at = np.searchsorted(own_t, t - origin + 1e-9, side="right") - 1
+        sampled.append(own_ticks[np.clip(at, 0, len(own_ticks) - 1)])
+    sides = []
+    errors = []
+    for wheel, (t, real_counts), sim_counts in zip(("left", "right"), kept, sampled):
+        real = real_counts - real_counts[0]
+        simulated = sim_counts - sim_counts[0]
+        error = _rate_error(t, real.astype(float), simulated.astype(float))
+        errors.append(error)
+        real_travel, sim_travel = _travel(real), _travel(simulated)
+        ratio = sim_travel / real_travel if real_travel else math.nan
+        sides.append(WheelReplay(wheel, real_travel, sim_travel, ratio, _rms(error)))
+    common_t = kept[0][0] - start
+    return ReplayReport(
+        bag=bag.path.name,
+        noise=profile.name,
+        commands=len(commands.t),
+        command_topic=commands.topic,
+        duration=end - start,
+        left=sides[0],
+        right=sides[1],
+        tick_rate_rms=_rms(np.concatenate(errors)),
+        t=common_t,
+        real_ticks=(kept[0][1] - kept[0][1][0], kept[1][1] - kept[1][1][0]),
+        sim_ticks=(sampled[0] - sampled[0][0], sampled[1] - sampled[1][0]),
+    )
+
+
+def _within(stream: EncoderStream, start: float, end: float) -> Tuple[np.ndarray, np.ndarray]:
+    """A wheel's readings from ``start`` to ``end`` (seconds)."""
+    keep = (stream.t >= start) & (stream.t <= end)
+    return stream.t[keep], stream.ticks[keep].astype(np.int64)

@@ -1,0 +1,154 @@
+"""Replaying a bag's commands into the simulator, and calibrating the motors from a bag."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from duckielib.bags import BagWriter
+from duckielib.errors import BagError
+from duckielib.messages import Header, WheelEncoderStamped, WheelsCmdStamped
+from duckielib.rostime import Time
+from duckielib.sim import NoiseProfile, Simulator, World
+from duckielib.sim.calibrate import calibrate_bag, steady_speeds
+from duckielib.sim.replay import replay_bag
+from duckielib.sim.robot import steady_speed
+from duckielib.tools.runner import run_mission
+
+VEH = "/ente/"
+#: An unusual robot: a wide dead band, a curve that bends, and a right motor 15 % weaker.
+TRUE_CURVE = ((0.18, 0.0), (0.5, 6.0), (1.0, 13.0))
+UNUSUAL = NoiseProfile.realistic(
+    name="unusual", speed_curve=TRUE_CURVE, right_gain=0.85, breakaway_pwm=None
+)
+#: Held commands (left, right, seconds): speeds forward, backward, and turns.
+DRIVE = [
+    (0.3, 0.3, 2.0), (0.0, 0.0, 1.0), (0.45, 0.45, 2.0), (0.0, 0.0, 1.0), (0.6, 0.6, 2.0),
+    (0.0, 0.0, 1.0), (-0.8, -0.8, 2.0), (0.0, 0.0, 1.0), (0.4, -0.4, 2.0), (0.0, 0.0, 1.0),
+    (0.25, 0.7, 2.0), (0.0, 0.0, 1.0),
+]  # fmt: skip
+
+
+def stamp(seconds):
+    return Header(stamp=Time.from_sec(seconds))
+
+
+def record_drive(path, profile, drive=DRIVE, seed=3, start=5.0):
+    """A bag of the simulator driving ``drive``: commands at 10 Hz and both encoders' ticks,
+    stamped from ``start`` seconds (as a robot's clock would)."""
+    sim = Simulator(seed=seed, noise=profile, world=World(tiles_x=30, tiles_y=30),
+                    start_pose=(8.0, 8.0, 0.0), trace_rate_hz=0)  # fmt: skip
+    with BagWriter(path) as bag:
+        t = 0.0
+        for left, right, seconds in drive:
+            for k in range(round(seconds * 10)):
+                now = t + k / 10
+                sim.run_until(now)
+                sim.set_wheel_duties(left, right)
+                message = WheelsCmdStamped(
+                    header=stamp(start + now), vel_left=left, vel_right=right
+                )
+                bag.write(
+                    VEH + "wheels_driver_node/wheels_cmd", message, round((start + now) * 1e9)
+                )
+                for reading in sim.pop_encoder_readings():
+                    tick = WheelEncoderStamped(
+                        header=stamp(start + reading.time), data=reading.ticks, resolution=135
+                    )
+                    topic = f"{VEH}{reading.wheel}_wheel_encoder_node/tick"
+                    bag.write(topic, tick, round((start + reading.time) * 1e9))
+            t += seconds
+    return path
+
+
+def test_a_mission_bag_replays_into_its_own_profile_tick_for_tick(tmp_path):
+    run = run_mission(out=tmp_path / "run", noise="realistic", seed=4, animation=False)
+    report = replay_bag(run.folder / "mission.bag", noise="realistic", seed=4)
+    assert report.commands > 500
+    assert report.command_topic.endswith("wheels_cmd_executed")
+    for real, simulated in zip(report.real_ticks, report.sim_ticks):
+        assert len(real) > 1000
+        assert np.array_equal(real, simulated)
+    assert report.left.travel_ratio == report.right.travel_ratio == 1.0
+    assert report.tick_rate_rms == 0.0
+    # Another profile drives the same commands elsewhere, and the figures say by how much.
+    ideal = replay_bag(run.folder / "mission.bag", noise="ideal", seed=4)
+    assert ideal.tick_rate_rms > 0.5
+    assert abs(ideal.right.travel_ratio - 1.0) > 0.01  # the realistic right wheel is weaker
+    figures = ideal.figures()
+    assert figures["noise"] == "ideal"
+    assert set(figures) >= {"travel_ratio_left", "travel_ratio_right", "tick_rate_rms"}
+
+
+def test_a_bag_of_an_unusual_robot_calibrates_back_to_it_within_5_percent(tmp_path):
+    bag = record_drive(tmp_path / "unusual.bag", UNUSUAL)
+    points = steady_speeds(bag)
+    assert len(points["left"]) == len(points["right"]) == 6  # every held command but stops
+    calibration = calibrate_bag(bag, name="ente")
+    fitted = calibration.profile
+    assert fitted.name == "ente"
+    true = {"left": TRUE_CURVE, "right": tuple((d, 0.85 * s) for d, s in TRUE_CURVE)}
+    for wheel, curve in (("left", fitted.speed_curve), ("right", fitted.right_speed_curve)):
+        assert curve[0][0] == pytest.approx(0.18, rel=0.05)  # the dead band
+        for duty in (0.3, 0.4, 0.5, 0.6, 0.8):
+            assert steady_speed(curve, duty) == pytest.approx(
+                steady_speed(true[wheel], duty), rel=0.05
+            ), (wheel, duty)
+    figures = calibration.figures()
+    assert figures["calibration_tick_rate_rms"] < 3.0
+    assert figures["calibration_travel_ratio_left"] == pytest.approx(1.0, abs=0.05)
+    assert figures["calibration_travel_ratio_right"] == pytest.approx(1.0, abs=0.05)
+    # The default profile is far from this robot; the fitted one is close.
+    before = replay_bag(bag, noise="realistic")
+    assert before.tick_rate_rms > 5 * calibration.replay.tick_rate_rms
+
+
+def test_a_bag_with_one_speed_says_what_to_record(tmp_path):
+    bag = record_drive(tmp_path / "one.bag", UNUSUAL, drive=[(0.4, 0.4, 3.0), (0.0, 0.0, 1.0)])
+    with pytest.raises(BagError, match="too few different commands of the left wheel") as caught:
+        calibrate_bag(bag)
+    assert "Record at least 3 different wheel commands, each held for 1 s or more" in str(
+        caught.value
+    )
+
+
+def test_a_bag_without_commands_says_which_topic_to_record(tmp_path):
+    with BagWriter(tmp_path / "ticks.bag") as bag:
+        for k in range(10):
+            tick = WheelEncoderStamped(header=stamp(k / 30), data=k, resolution=135)
+            bag.write(VEH + "left_wheel_encoder_node/tick", tick, k * 33_000_000 + 1)
+    with pytest.raises(
+        BagError, match=r"needs the wheel commands .* wheels_driver_node/wheels_cmd"
+    ):
+        replay_bag(tmp_path / "ticks.bag")
+    assert math.isfinite(1.0)
+
+
+def test_the_commands_print_name_value_lines_and_write_a_profile_duckie_mission_takes(
+    tmp_path, capsys
+):
+    from duckielib.tools.cli import main
+
+    bag = record_drive(tmp_path / "unusual.bag", UNUSUAL)
+    profile = tmp_path / "ente.json"
+    assert main(["calibrate", str(bag), "-o", str(profile)]) == 0
+    lines = dict(
+        line.split(": ", 1) for line in capsys.readouterr().out.splitlines() if ": " in line
+    )
+    assert float(lines["calibration_dead_band_left"]) == pytest.approx(0.18, rel=0.05)
+    assert float(lines["calibration_tick_rate_rms"]) < 3.0
+    assert {"calibration_travel_ratio_left", "calibration_travel_ratio_right"} <= set(lines)
+    assert NoiseProfile.load(profile).name == "ente"
+    assert main(["sim", "replay", str(bag), "--noise", str(profile), "--json"]) == 0
+    figures = json.loads(capsys.readouterr().out)
+    assert figures["noise"] == "ente"
+    assert figures["travel_ratio_right"] == pytest.approx(1.0, abs=0.05)
+    with pytest.raises(SystemExit) as refused:
+        main(["sim", "replay", str(bag), "--noise", "noisy"])
+    assert refused.value.code == 2
+    assert "give ideal, realistic or a profile file (robot.json), not 'noisy'" in (
+        capsys.readouterr().err
+    )
