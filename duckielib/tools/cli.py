@@ -354,6 +354,17 @@ def _add_simulator(commands: argparse._SubParsersAction) -> None:
     _add_replay_topics(replay)
     replay.add_argument("--json", action="store_true", help="print the figures as JSON")
     replay.set_defaults(handler=_sim_replay)
+    motors = sim_commands.add_parser(
+        "motors",
+        help="the simulated wheels' steady speeds for the commands real DB21s were measured with",
+    )
+    motors.add_argument(
+        "--noise",
+        default="realistic",
+        type=_noise,
+        help="the simulated robot: ideal, realistic (default) or a profile file (robot.json)",
+    )
+    motors.set_defaults(handler=_sim_motors)
 
 
 def _add_replay_topics(parser: argparse.ArgumentParser) -> None:
@@ -396,6 +407,18 @@ def _sim_replay(args: argparse.Namespace) -> int:
 
     report = replay_bag(args.bag, args.noise, args.seed, args.commands, args.left, args.right)
     _print_figures(report.figures(), args.json)
+    return 0
+
+
+def _sim_motors(args: argparse.Namespace) -> int:
+    from duckielib.sim.motors import motor_table
+
+    print(f"{'command':<30} {'duties':>14} {'simulated rad/s':>17} {'real DB21 rad/s':>21}")
+    for row in motor_table(args.noise):
+        duties = f"{row.duties[0]:+.3f} {row.duties[1]:+.3f}"
+        simulated = f"{row.simulated[0]:.1f} {row.simulated[1]:.1f}"
+        real = " ".join(f"{low:.1f}-{high:.1f}" for low, high in row.real)
+        print(f"{row.what:<30} {duties:>14} {simulated:>17} {real:>21}")
     return 0
 
 

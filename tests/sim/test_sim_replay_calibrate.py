@@ -152,3 +152,22 @@ def test_the_commands_print_name_value_lines_and_write_a_profile_duckie_mission_
     assert "give ideal, realistic or a profile file (robot.json), not 'noisy'" in (
         capsys.readouterr().err
     )
+
+
+def test_the_motor_table_holds_the_real_commands_and_measures_the_simulated_wheels(capsys):
+    from duckielib.sim.motors import REAL_DB21, motor_table
+    from duckielib.tools.cli import main
+
+    ideal = {row.what: row for row in motor_table("ideal")}
+    assert [row[0] for row in REAL_DB21] == list(ideal)
+    # The driver's linear law: duty 0.3 is PWM 118, (118 - 60) / 195 of 27 rad/s.
+    assert ideal["straight, 0.30"].simulated == pytest.approx((27 * 58 / 195,) * 2, rel=1e-3)
+    # A profile whose curve goes through the real straight figures gives them back.
+    fitted = NoiseProfile.ideal(speed_curve=((0.12, 0.0), (0.175, 1.8), (0.3, 3.65), (0.4, 6.4)))
+    rows = {row.what: row for row in motor_table(fitted)}
+    for what in ("straight, 0.30", "straight, 0.40", "turning in place"):
+        assert rows[what].ratio() == pytest.approx((1.0, 1.0), abs=0.05), what
+    assert main(["sim", "motors", "--noise", "ideal"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].split() == ["command", "duties", "simulated", "rad/s", "real", "DB21", "rad/s"]
+    assert out[2].split()[-4:] == ["8.0", "8.0", "3.6-3.7", "3.6-3.7"]
