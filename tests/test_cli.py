@@ -223,6 +223,15 @@ def test_a_negative_seed_is_refused_by_the_command_line():
     )
 
 
+def test_an_unknown_stop_colour_is_refused_naming_the_option_and_the_patterns():
+    result = duckie("mission", "--stop-color", "PINK")
+    assert result.returncode == 2
+    last = result.stderr.splitlines()[-1]
+    assert last.startswith("duckie mission: error: argument --stop-color: give an LED pattern's")
+    assert "RED, GREEN, BLUE" in last
+    assert last.endswith("not 'PINK'")
+
+
 @pytest.mark.parametrize("call", ["sys.exit(3)", "exit()"])
 def test_a_solution_that_exits_while_imported_is_named(tmp_path, call):
     solution = tmp_path / "mine.py"

@@ -303,7 +303,9 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
     mission.add_argument(
         "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
     )
-    mission.add_argument("--stop-color", help="the LED pattern of the stops (default: RED)")
+    mission.add_argument(
+        "--stop-color", type=_pattern, help="the LED pattern of the stops (default: RED)"
+    )
     mission.add_argument("--out", default="runs/latest", help="folder for the bag, plot, summary")
     mission.add_argument(
         "--no-animation", action="store_true", help="skip mission.gif (a few seconds faster)"
@@ -420,6 +422,17 @@ def _sim_motors(args: argparse.Namespace) -> int:
         real = " ".join(f"{low:.1f}-{high:.1f}" for low, high in row.real)
         print(f"{row.what:<30} {duties:>14} {simulated:>17} {real:>21}")
     return 0
+
+
+def _pattern(text: str) -> str:
+    """An LED pattern's name from the command line (``RED``, ``GREEN``...)."""
+    from duckielib.leds import PATTERNS
+
+    if text not in PATTERNS:
+        raise argparse.ArgumentTypeError(
+            f"give an LED pattern's name ({', '.join(PATTERNS)}), not {text!r}"
+        )
+    return text
 
 
 def _seed(text: str) -> int:
