@@ -32,7 +32,7 @@ from __future__ import annotations
 from duckielib.sim.duckiebot import VirtualDuckiebot
 from duckielib.sim.encoders import EncoderReading
 from duckielib.sim.noise import NoiseProfile, noise_profile
-from duckielib.sim.robot import Pose, Twist, pwm_from_duty
+from duckielib.sim.robot import Pose, Twist, pwm_from_duty, steady_speed
 from duckielib.sim.simulator import START_POSE, LEDState, Simulator, Trace
 from duckielib.sim.world import World
 
@@ -49,4 +49,5 @@ __all__ = [
     "Trace",
     "START_POSE",
     "pwm_from_duty",
+    "steady_speed",
 ]

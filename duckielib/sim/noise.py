@@ -1,19 +1,24 @@
 """Noise profiles: how far the virtual Duckiebot is from an ideal unicycle.
 
-A :class:`NoiseProfile` is a frozen set of the imperfections the simulator reproduces. Two
+A :class:`NoiseProfile` is a frozen set of the imperfections the simulator reproduces. Three
 profiles are named:
 
 - :meth:`NoiseProfile.ideal`: equal wheels, tyres that never slip, encoders sampled on a perfectly
-  regular schedule, any PWM out of the dead zone turns a wheel. Each wheel's ticks match its
-  travel up to quantisation; odometry still drifts a little, as on any robot, because the two
-  wheels are sampled at different instants and a wheel that coasts after its command changed
-  sign counts by the new sign (the real encoder driver's rule).
+  regular schedule that count the way the wheel turns, the wheels and track odometry assumes,
+  any PWM out of the driver's dead zone turns a wheel (the driver's linear law, 27 rad/s at duty
+  1). Each wheel's ticks match its travel up to quantisation: odometry follows the truth (the two
+  wheels are still sampled at different instants, which only hard reversals show).
 - :meth:`NoiseProfile.realistic`: the right wheel is 3 % weaker than the left (so trim matters),
   tyres slip when asked for more than the mat's friction gives (hard starts and stops), encoder
-  samples come a few milliseconds late or early, and a wheel at rest needs a bit more than the
-  driver's smallest PWM to break free.
+  samples come a few milliseconds late or early and count by the encoder driver's rule, and a
+  wheel at rest needs a bit more than the driver's smallest PWM to break free.
+- :meth:`NoiseProfile.db21`: the realistic robot with motors and wheels as measured on real DB21
+  robots: a dead band up to duty 0.12, then about half the speed the driver's linear law
+  promises (3.65 rad/s at 0.30, 6.4 at 0.40), wheels 5 % smaller and a track 10 % wider than the
+  nominal ones odometry uses (tyres scrub in turns). At the robot's default kinematics gain it
+  drives at about 40 % of the commanded speed, and its odometry drifts as a real robot's does.
 
-Every parameter can be set on its own, starting from either profile::
+Every parameter can be set on its own, starting from any of them::
 
     NoiseProfile.realistic(encoder_jitter_s=0.0)
     NoiseProfile.ideal().replace(right_gain=0.97)
@@ -34,12 +39,29 @@ from duckielib.errors import ConfigError
 __all__ = ["NoiseProfile", "noise_profile"]
 
 
+#: The db21 profile's steady wheel speed (rad/s) against the duty cycle, fitted to real DB21
+#: robots (``duckie sim motors``): a dead band up to 0.12, then 1.8 rad/s at 0.175 (turning in
+#: place, 1.6 to 2.0 measured), 3.65 at 0.30 (3.6 to 3.7), 6.4 at 0.40 (6.1 to 6.7), 9.5 at
+#: 0.62 and 14 at 1, about half the driver's linear law (27 rad/s at 1).
+DB21_SPEED_CURVE = (
+    (0.12, 0.0),
+    (0.175, 1.8),
+    (0.30, 3.65),
+    (0.40, 6.4),
+    (0.62, 9.5),
+    (1.0, 14.0),
+)
+#: The PWM of duty 0.12 (the dead band's edge): a wheel at rest needs it to start.
+DB21_BREAKAWAY_PWM = 83
+
+
 @dataclass(frozen=True)
 class NoiseProfile:
     """The imperfections of one simulated Duckiebot.
 
     Attributes:
-        name: the profile's name, for reports (``"ideal"``, ``"realistic"`` or ``"custom"``).
+        name: the profile's name, for reports (``"ideal"``, ``"realistic"``, ``"db21"`` or
+            ``"custom"``).
         left_gain: factor on the left motor's speed (1 is nominal).
         right_gain: factor on the right motor's speed (1 is nominal).
         friction_coefficient: tyre-to-mat friction coefficient; the largest force a wheel can
@@ -132,6 +154,23 @@ class NoiseProfile:
         )
         return profile.replace(**changes)
 
+    @classmethod
+    def db21(cls, **changes: object) -> NoiseProfile:
+        """Motors and wheels as measured on real DB21 robots; ``changes`` override."""
+        profile = cls(
+            name="db21",
+            left_gain=1.0,
+            right_gain=0.97,
+            friction_coefficient=0.8,
+            encoder_jitter_s=0.002,
+            breakaway_pwm=DB21_BREAKAWAY_PWM,
+            speed_curve=DB21_SPEED_CURVE,
+            wheel_radius_scale=0.95,
+            baseline_scale=1.1,
+            encoder_counts_by_command=True,
+        )
+        return profile.replace(**changes)
+
     def to_dict(self) -> Dict[str, Any]:
         """The parameters that differ from the ideal profile's, and the name, for JSON."""
         ideal = NoiseProfile()
@@ -218,7 +257,7 @@ def _check_curve(curve: object, field: str) -> Tuple[Tuple[float, float], ...]:
 
 
 def noise_profile(profile: Union[str, os.PathLike, NoiseProfile]) -> NoiseProfile:
-    """The profile itself, the named one (``"ideal"`` or ``"realistic"``), or a profile file.
+    """The profile itself, the named one (``"ideal"``, ``"realistic"``, ``"db21"``) or a file.
 
     A profile file is JSON, as :meth:`NoiseProfile.save` writes it (and ``duckie calibrate``):
     an object of the parameters that differ from the ideal profile's.
@@ -232,12 +271,14 @@ def noise_profile(profile: Union[str, os.PathLike, NoiseProfile]) -> NoiseProfil
         return NoiseProfile.ideal()
     if profile == "realistic":
         return NoiseProfile.realistic()
+    if profile == "db21":
+        return NoiseProfile.db21()
     path = Path(profile)
     if path.suffix == ".json" or path.is_file():
         return NoiseProfile.load(path)
     raise ConfigError(
-        f"There is no noise profile called {str(profile)!r}; use 'ideal', 'realistic', a profile "
-        "file (robot.json) or a NoiseProfile."
+        f"There is no noise profile called {str(profile)!r}; use 'ideal', 'realistic', 'db21', "
+        "a profile file (robot.json) or a NoiseProfile."
     )
 
 

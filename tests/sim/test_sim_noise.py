@@ -72,6 +72,8 @@ def test_impossible_values_are_rejected(changes):
 def test_profiles_by_name():
     assert noise_profile("ideal") == NoiseProfile.ideal()
     assert noise_profile("realistic") == NoiseProfile.realistic()
+    assert noise_profile("db21") == NoiseProfile.db21()
+    assert NoiseProfile.db21().speed_curve[0] == (0.12, 0.0)  # the measured dead band
     custom = NoiseProfile(right_gain=0.9)
     assert noise_profile(custom) is custom
     assert Simulator(noise="realistic").noise == NoiseProfile.realistic()

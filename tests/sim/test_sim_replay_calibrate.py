@@ -149,7 +149,7 @@ def test_the_commands_print_name_value_lines_and_write_a_profile_duckie_mission_
     with pytest.raises(SystemExit) as refused:
         main(["sim", "replay", str(bag), "--noise", "noisy"])
     assert refused.value.code == 2
-    assert "give ideal, realistic or a profile file (robot.json), not 'noisy'" in (
+    assert "give ideal, realistic, db21 or a profile file (robot.json), not 'noisy'" in (
         capsys.readouterr().err
     )
 
@@ -171,3 +171,20 @@ def test_the_motor_table_holds_the_real_commands_and_measures_the_simulated_whee
     out = capsys.readouterr().out.splitlines()
     assert out[0].split() == ["command", "duties", "simulated", "rad/s", "real", "DB21", "rad/s"]
     assert out[2].split()[-4:] == ["8.0", "8.0", "3.6-3.7", "3.6-3.7"]
+
+
+def test_the_db21_profile_gives_the_real_robots_figures_and_their_drift(tmp_path):
+    from duckielib.sim.motors import motor_table
+
+    rows = {row.what: row for row in motor_table("db21")}
+    for what in ("straight, 0.30", "straight, 0.40", "turning in place"):
+        left, right = rows[what].ratio()
+        assert 0.9 < left < 1.1, what  # within 10 % of the real robots' figures
+        assert 0.85 < right < 1.1, what  # the right wheel is 3 % weaker
+    # The mission with the reference solution finishes, and ends tens of centimetres from its
+    # start by the ground truth while its own odometry believes it is home, as real robots did.
+    run = run_mission(out=tmp_path / "db21", noise="db21", seed=0, animation=False)
+    summary = run.summary
+    assert summary["distance_to_start"] > 0.2
+    odometry_end = summary["final_pose_odometry"]
+    assert math.hypot(odometry_end[0] - 0.32, odometry_end[1] - 0.32) < 0.05
