@@ -172,8 +172,8 @@ def test_a_robot_that_never_drives_loses_every_driving_point(tmp_path, reference
 def test_a_square_turned_the_wrong_way_loses_the_square_but_not_the_circle(tmp_path, reference):
     # Every turn of the square goes the other way: the first one faces the robot west, into the
     # wall beside its start, where it stays pinned. It never drives the square, so its way back
-    # (it began 0.25 m from home after 0.52 m of driving) cannot be credited either; the circle
-    # after it is driven as well as ever.
+    # (it began 0.25 m from home after 0.54 m of driving) cannot be credited either; the circle
+    # after it starts against that wall, which stops it after 117 of its 360 degrees.
     wrong = changed(
         reference,
         "goal = (x, y, (theta + move.angle) % (2 * math.pi))",
@@ -184,9 +184,12 @@ def test_a_square_turned_the_wrong_way_loses_the_square_but_not_the_circle(tmp_p
     driving = score_bag(tmp_path / "run")
     assert driving.parts["square"] <= 20 / 6
     assert driving.parts == {
-        "bag": 5, "states": 20, "stops": 15, "square": 3.33, "return": 0, "circle": 20,
+        "bag": 5, "states": 20, "stops": 15, "square": 3.33, "return": 0, "circle": 6.67,
     }  # fmt: skip
     assert driving.reasons[0] == "In state square, turn 1 turned 0°; it should turn 90° clockwise."
+    assert "In state circle, the circle turned 117° clockwise; it should turn 360° clockwise." in (
+        driving.reasons
+    )
 
 
 def test_a_mission_past_the_simulated_time_limit_is_scored_from_its_bag(tmp_path, reference):
