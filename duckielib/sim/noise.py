@@ -156,18 +156,13 @@ class NoiseProfile:
 
     @classmethod
     def db21(cls, **changes: object) -> NoiseProfile:
-        """Motors and wheels as measured on real DB21 robots; ``changes`` override."""
-        profile = cls(
+        """The realistic robot, its motors and wheels as measured on DB21s; ``changes`` override."""
+        profile = cls.realistic(
             name="db21",
-            left_gain=1.0,
-            right_gain=0.97,
-            friction_coefficient=0.8,
-            encoder_jitter_s=0.002,
             breakaway_pwm=DB21_BREAKAWAY_PWM,
             speed_curve=DB21_SPEED_CURVE,
             wheel_radius_scale=0.95,
             baseline_scale=1.1,
-            encoder_counts_by_command=True,
         )
         return profile.replace(**changes)
 
