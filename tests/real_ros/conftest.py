@@ -164,9 +164,15 @@ class Master:
 
     def start_clock(self, recorded: List[str], timeout: float = 60) -> None:
         """Start a paused virtual Duckiebot once the recorder hears every publisher of
-        ``recorded``, so the bag misses nothing of the first seconds."""
+        ``recorded`` and the clock, so the bag misses nothing of the first seconds.
+
+        The recorder stamps each message with its own reading of ``/clock``: connected late
+        to the clock, it would stamp the first second's messages with a later time. With no
+        topics to record, there is no recorder to wait for.
+        """
         deadline = time.monotonic() + timeout
-        while not all(self.connected(topic) for topic in recorded):
+        awaited = [*recorded, "/clock"] if recorded else []
+        while not all(self.connected(topic) for topic in awaited):
             assert time.monotonic() < deadline, f"the recorder missed a topic of {recorded}"
             time.sleep(0.2)
         subprocess.run(
