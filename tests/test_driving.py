@@ -7,6 +7,7 @@ a robot that only pretends to drive, missions that never end, a square turned th
 from __future__ import annotations
 
 import os
+import re
 import struct
 import subprocess
 
@@ -136,14 +137,20 @@ def test_the_reference_drives_the_mission_for_full_marks(sandbox, tmp_path):
     assert driving.figure.startswith(b"\x89PNG")
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3])
-def test_the_reference_keeps_full_marks_on_the_realistic_robot(tmp_path, seed):
-    # Measured: 100 on seeds 0 to 9 (turns within 5 degrees, sides within 1 cm, the circle's
-    # radius 0.187 m for 0.20 m); the margin is for changes to the simulator's noise.
-    run_mission(out=tmp_path / "run", noise="realistic", seed=seed, animation=False)
+def test_the_realistic_robot_is_judged_by_where_it_really_went(tmp_path):
+    # On the realistic robot odometry drifts as on a real DB21 (smaller wheels, wider track
+    # than nominal): the reference's turns believe they turned 90 degrees and really turn
+    # less, and the judge, measuring the ground truth, says so. The course grades the ideal
+    # robot; this run shows what a student would meet on a real one.
+    run_mission(out=tmp_path / "run", noise="realistic", seed=0, animation=False)
     driving = score_bag(tmp_path / "run")
-    assert driving.score >= 95, driving.reasons
-    assert driving.parts["square"] >= 20 * 5 / 6
+    assert driving.finished
+    assert driving.parts["states"] == 20
+    assert driving.parts["stops"] == 15
+    assert driving.score < 60
+    first = driving.reasons[0]
+    turned = int(re.match(r"In state square, turn 1 turned (\d+)° clockwise", first).group(1))
+    assert 70 <= turned <= 85, first
 
 
 def test_a_robot_that_never_drives_loses_every_driving_point(tmp_path, reference):

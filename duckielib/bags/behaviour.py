@@ -317,6 +317,26 @@ def mission_report(
     return report
 
 
+def _closure_problem(report: MissionReport) -> str:
+    """The sentence for a robot that ended too far from the start, with odometry's belief."""
+    assert report.distance_to_start is not None
+    problem = (
+        f"The robot ended {100 * report.distance_to_start:.1f} cm from the start; "
+        f"it should end within {100 * CLOSURE_TOLERANCE_M:.0f} cm."
+    )
+    believed = report.final_pose_odometry
+    start = report.mission.start
+    if believed is not None:
+        away = math.hypot(believed[0] - start[0], believed[1] - start[1])
+        if away <= CLOSURE_TOLERANCE_M:
+            problem += (
+                f" Its odometry believed it was {100 * away:.1f} cm from the start: the "
+                "difference is odometry's drift (wheels, track and slip unlike the nominal "
+                "ones), not the mission node's."
+            )
+    return problem
+
+
 def _problems(report: MissionReport) -> List[str]:
     problems: List[str] = []
     mission = report.mission
@@ -345,10 +365,7 @@ def _problems(report: MissionReport) -> List[str]:
     if report.distance_to_start is None:
         problems.append("The bag has no ground truth, so the end cannot be checked.")
     elif not report.closed:
-        problems.append(
-            f"The robot ended {100 * report.distance_to_start:.1f} cm from the start; "
-            f"it should end within {100 * CLOSURE_TOLERANCE_M:.0f} cm."
-        )
+        problems.append(_closure_problem(report))
     if report.final_pose_odometry is None:
         problems.append("The bag has no odometry pose (odometry_node/pose).")
     return problems

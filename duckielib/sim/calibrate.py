@@ -2,12 +2,15 @@
 
 A bag that holds the wheel commands and both encoders' ticks says, for every command held
 long enough, how fast each wheel really turned. :func:`calibrate_bag` finds those steady
-stretches (a command held 1 s or more; its second half, once the wheel has settled), measures
-each wheel's speed there, and fits each motor's speed curve through them: the dead band (the
-largest command that does not turn the wheel, extended from the two slowest speeds) and a
-knot at every command measured, extended in a straight line to duty 1. The fitted profile
-keeps the realistic profile's other imperfections (slip, encoder jitter, the encoder driver's
-counting rule) and is checked by replaying the bag's commands into it (:mod:`.replay`).
+stretches (a command held 1 s or more; its second half, once the wheel has settled) and
+measures each wheel's speed there. The commands that drive straight or turn the wheels opposite
+ways give each motor's speed curve: the dead band (the largest command that does not turn the
+wheel, extended from the two slowest speeds) and a knot at every command measured, extended in
+a straight line to duty 1. The arcs (both wheels the same way, at different commands) give
+the ground's resistance to turning, the value that best predicts how far their slow wheel was
+dragged along. The fitted profile keeps the realistic profile's other imperfections (wheel
+size and track, slip, encoder jitter, the encoder driver's counting rule: encoders alone
+cannot measure them) and is checked by replaying the bag's commands into it (:mod:`.replay`).
 
 ``duckie calibrate BAG -o robot.json`` writes the profile; ``duckie mission --noise
 robot.json`` then drives a simulated robot that behaves like yours.
@@ -29,7 +32,7 @@ from duckielib.errors import BagError
 from duckielib.sim.noise import NoiseProfile
 from duckielib.sim.replay import ReplayReport, replay_bag, wheel_commands
 
-__all__ = ["Calibration", "calibrate_bag", "steady_speeds"]
+__all__ = ["Calibration", "Held", "calibrate_bag", "held_commands", "steady_speeds"]
 
 #: The shortest command that counts as held, and the part of it measured (its second half).
 HOLD_S = 1.0
@@ -39,6 +42,16 @@ LEVEL_STEP = 0.02
 LEVELS_NEEDED = 3
 #: A wheel slower than this (rad/s) over a held command did not turn.
 STILL = 0.1
+#: The last part of a held command left out of its measure, in seconds: encoders that count by
+#: the command's sign count the next command's way as soon as it comes.
+EDGE_S = 0.1
+#: The largest turning resistance tried (s/rad).
+TURNING_MAX = 3.0
+_WHAT_TO_RECORD = (
+    f"Record at least {LEVELS_NEEDED} different wheel commands on both wheels, each held for "
+    "1 s or more (for example 0.2, 0.35 and 0.5), then arcs mixing them (0.2 on one wheel, "
+    "0.5 on the other), and calibrate again."
+)
 
 PathLike = Union[str, "os.PathLike[str]"]
 Curve = Tuple[Tuple[float, float], ...]
@@ -52,23 +65,28 @@ class Calibration:
         profile: the fitted noise profile (save it with ``profile.save("robot.json")``).
         points: each wheel's measured ``(|duty|, rad/s)`` pairs, one per held command.
         replay: the bag replayed into the fitted profile.
+        arcs: how many held commands were arcs (they fit the turning resistance).
     """
 
     profile: NoiseProfile
     points: Dict[str, List[Tuple[float, float]]]
     replay: ReplayReport
+    arcs: int = 0
 
     def figures(self) -> Dict[str, Union[str, int, float]]:
         """The fit as ``name: value`` pairs (what ``duckie calibrate`` prints)."""
         figures: Dict[str, Union[str, int, float]] = {"bag": self.replay.bag}
-        curves = {"left": self.profile.speed_curve, "right": self.profile.right_speed_curve}
+        curve = self.profile.speed_curve or ()
+        gains = {"left": self.profile.left_gain, "right": self.profile.right_gain}
+        figures["calibration_dead_band"] = round(curve[0][0], 4) if curve else 0.0
         for wheel in ("left", "right"):
-            curve = curves[wheel] or ()
             figures[f"calibration_held_commands_{wheel}"] = len(self.points[wheel])
-            figures[f"calibration_dead_band_{wheel}"] = round(curve[0][0], 4)
             for duty in (0.3, 0.5, 1.0):
-                speed = _speed_on(curve, duty)
+                speed = gains[wheel] * _speed_on(curve, duty)
                 figures[f"calibration_speed_at_{duty:g}_{wheel}"] = round(speed, 3)
+        figures["calibration_right_gain"] = self.profile.right_gain
+        figures["calibration_held_arcs"] = self.arcs
+        figures["calibration_turning_resistance"] = self.profile.turning_resistance
         figures["calibration_tick_rate_rms"] = round(self.replay.tick_rate_rms, 3)
         figures["calibration_travel_ratio_left"] = round(self.replay.left.travel_ratio, 4)
         figures["calibration_travel_ratio_right"] = round(self.replay.right.travel_ratio, 4)
@@ -81,17 +99,37 @@ def _speed_on(curve: Curve, duty: float) -> float:
     return steady_speed(curve, duty) if curve else 0.0
 
 
-def steady_speeds(
+@dataclass(frozen=True)
+class Held:
+    """A command held 1 s or more, and the wheels' steady speeds over its second half.
+
+    Attributes:
+        left_duty: the left wheel's command.
+        right_duty: the right wheel's command.
+        left_speed: the left wheel's speed, rad/s, positive forward.
+        right_speed: the right wheel's speed, rad/s, positive forward.
+    """
+
+    left_duty: float
+    right_duty: float
+    left_speed: float
+    right_speed: float
+
+    @property
+    def arc(self) -> bool:
+        """Whether both wheels were driven the same way at different commands."""
+        return self.left_duty * self.right_duty >= 0 and (
+            abs(self.left_duty - self.right_duty) >= LEVEL_STEP
+        )
+
+
+def held_commands(
     bag: Union[Bag, PathLike],
     command_topic: Optional[str] = None,
     left_topic: Optional[str] = None,
     right_topic: Optional[str] = None,
-) -> Dict[str, List[Tuple[float, float]]]:
-    """Each wheel's ``(|duty|, rad/s)`` for every command held 1 s or more (module doc).
-
-    The speed is measured over the command's second half, along the command's direction
-    (a wheel that turned the other way has a negative speed).
-    """
+) -> List[Held]:
+    """Every command held 1 s or more but stops, with both wheels' speeds (module doc)."""
     bag = bag if isinstance(bag, Bag) else Bag(bag)
     commands = wheel_commands(bag, command_topic)
     streams = read_encoders(bag, left_topic, right_topic)
@@ -106,26 +144,137 @@ def steady_speeds(
     ends = [float(commands.t[index]) for index in changes[1:]] + [
         min(float(stream.t[-1]) for stream in streams)
     ]
-    points: Dict[str, List[Tuple[float, float]]] = {"left": [], "right": []}
+    held: List[Held] = []
     for begin_index, end in zip(changes, ends):
         begin = float(commands.t[begin_index])
-        if end - begin < HOLD_S:
-            continue
+        left, right = float(commands.left[begin_index]), float(commands.right[begin_index])
         middle = (begin + end) / 2
-        duties = {"left": commands.left[begin_index], "right": commands.right[begin_index]}
-        for wheel, stream in zip(("left", "right"), streams):
-            duty = float(duties[wheel])
-            if duty == 0 or stream.t[0] > middle or stream.t[-1] < end:
-                continue
-            ticks = np.interp([middle, end], stream.t, stream.ticks.astype(float))
+        if end - begin < HOLD_S or left == right == 0:
+            continue
+        if any(stream.t[0] > middle or stream.t[-1] < end for stream in streams):
+            continue
+        speeds = []
+        last = end - EDGE_S
+        for stream in streams:
+            ticks = np.interp([middle, last], stream.t, stream.ticks.astype(float))
             resolution = float(stream.resolution[0])
-            speed = (ticks[1] - ticks[0]) / (end - middle) * math.tau / resolution
-            points[wheel].append((abs(duty), math.copysign(1.0, duty) * speed))
+            speeds.append((ticks[1] - ticks[0]) / (last - middle) * math.tau / resolution)
+        held.append(Held(left, right, speeds[0], speeds[1]))
+    return held
+
+
+def steady_speeds(
+    bag: Union[Bag, PathLike],
+    command_topic: Optional[str] = None,
+    left_topic: Optional[str] = None,
+    right_topic: Optional[str] = None,
+) -> Dict[str, List[Tuple[float, float]]]:
+    """Each wheel's ``(|duty|, rad/s)`` for every command held 1 s or more (module doc).
+
+    The speed is measured over the command's second half, along the command's direction
+    (a wheel that turned the other way has a negative speed).
+    """
+    return _points(held_commands(bag, command_topic, left_topic, right_topic))
+
+
+def _points(held: List[Held]) -> Dict[str, List[Tuple[float, float]]]:
+    """Each wheel's ``(|duty|, rad/s)`` from held commands, along each wheel's command."""
+    points: Dict[str, List[Tuple[float, float]]] = {"left": [], "right": []}
+    for command in held:
+        for wheel, duty, speed in (
+            ("left", command.left_duty, command.left_speed),
+            ("right", command.right_duty, command.right_speed),
+        ):
+            if duty != 0:
+                points[wheel].append((abs(duty), math.copysign(1.0, duty) * speed))
     return points
 
 
-def _fit_curve(points: List[Tuple[float, float]], wheel: str, bag: str) -> Curve:
-    """A wheel's speed curve through its measured points (module doc)."""
+def _curve_points(held: List[Held], right_gain: float, turning: float) -> List[Tuple[float, float]]:
+    """The left motor's ``(|duty|, rad/s)`` alone, from the commands that drive straight.
+
+    A straight command gives its mean speed, a turn in place half its wheels' difference
+    before the ground's resistance; the right motor is ``right_gain`` times the left one.
+    """
+    points = []
+    scale = 2.0 / (1.0 + right_gain)
+    for command in held:
+        mean = 0.5 * (command.left_speed + command.right_speed)
+        if abs(command.left_duty - command.right_duty) < LEVEL_STEP:
+            sign = math.copysign(1.0, command.right_duty)
+            points.append((abs(command.right_duty), scale * sign * mean))
+        elif abs(command.left_duty + command.right_duty) < LEVEL_STEP:
+            half_difference = 0.5 * (command.right_speed - command.left_speed)
+            free = half_difference * (1.0 + turning * abs(mean))
+            sign = math.copysign(1.0, command.right_duty)
+            points.append((abs(command.right_duty), scale * sign * free))
+    return points
+
+
+def _predicted(
+    command: Held, curve: Curve, right_gain: float, turning: float
+) -> Tuple[float, float]:
+    """The wheels' steady speeds (rad/s, forward) the fitted model gives for a command."""
+    from duckielib.sim.robot import loaded_speeds
+
+    left = math.copysign(_speed_on(curve, abs(command.left_duty)), command.left_duty)
+    right = math.copysign(
+        right_gain * _speed_on(curve, abs(command.right_duty)), command.right_duty
+    )
+    return loaded_speeds(left, right, turning)
+
+
+def _fit_model(held: List[Held], bag: str) -> Tuple[Curve, float, float]:
+    """The motors' speed curve, the right motor's gain and the turning resistance.
+
+    They are the ones that together best predict every held command's wheel speeds (least
+    squares, searched on a coarse grid and then around its best point).
+    """
+    moving = [
+        command for command in held if not command.arc and (command.left_duty or command.right_duty)
+    ]
+    if not _curve_points(moving, 1.0, 0.0):
+        raise BagError(
+            f"{bag} holds no command that drives both wheels straight or turns in place, held "
+            "1 s or more. " + _WHAT_TO_RECORD
+        )
+    _fit_curve(_curve_points(moving, 1.0, 0.0), bag)  # a sentence if too few levels
+
+    def error(right_gain: float, turning: float) -> Tuple[float, Curve]:
+        curve = _fit_curve(_curve_points(moving, right_gain, turning), bag)
+        total = 0.0
+        for command in held:
+            left, right = _predicted(command, curve, right_gain, turning)
+            total += (left - command.left_speed) ** 2 + (right - command.right_speed) ** 2
+        return total, curve
+
+    turnings = [step * 0.05 for step in range(round(TURNING_MAX / 0.05) + 1)]
+    if not any(command.arc for command in held):
+        turnings = [0.0]
+    best = (math.inf, 1.0, 0.0)
+    for gain_step in range(-30, 31):
+        for turning in turnings:
+            total, _ = error(1.0 + gain_step * 0.01, turning)
+            if total < best[0] - 1e-12:
+                best = (total, 1.0 + gain_step * 0.01, turning)
+    _, gain, turning = best
+    span_gain, span_turning = 0.01, 0.05 if len(turnings) > 1 else 0.0
+    for _ in range(2):  # refine: a finer grid around the best point, twice
+        for gain_step in range(-10, 11):
+            for turning_step in range(-10, 11):
+                candidate_gain = gain + gain_step * span_gain / 10
+                candidate_turning = max(0.0, turning + turning_step * span_turning / 10)
+                total, _ = error(candidate_gain, candidate_turning)
+                if total < best[0] - 1e-12:
+                    best = (total, candidate_gain, candidate_turning)
+        _, gain, turning = best
+        span_gain, span_turning = span_gain / 10, span_turning / 10
+    _, curve = error(gain, turning)
+    return curve, round(gain, 4), round(turning, 4)
+
+
+def _fit_curve(points: List[Tuple[float, float]], bag: str) -> Curve:
+    """A motor's speed curve through its measured points (module doc)."""
     levels: Dict[float, List[float]] = {}
     for duty, speed in sorted(points):
         key = next((level for level in levels if abs(level - duty) < LEVEL_STEP), duty)
@@ -136,11 +285,9 @@ def _fit_curve(points: List[Tuple[float, float]], wheel: str, bag: str) -> Curve
     if len(moving) < LEVELS_NEEDED:
         held = ", ".join(f"{duty:.2f}" for duty, _ in means) or "none"
         raise BagError(
-            f"{bag} holds too few different commands of the {wheel} wheel that turn it, each "
-            f"held 1 s or more, to fit its motor (found {len(moving)}; commands held: {held}). "
-            f"Record at least {LEVELS_NEEDED} different wheel commands, each held for 1 s or "
-            "more (for example 0.2, 0.35 and 0.5 on both wheels, then the same while turning), "
-            "and calibrate again."
+            f"{bag} holds too few different commands that drive straight or turn in place and "
+            f"turn the wheels, each held 1 s or more, to fit the motors (found {len(moving)}; "
+            f"commands held: {held}). " + _WHAT_TO_RECORD
         )
     (d0, s0), (d1, s1) = moving[0], moving[1]
     slope = (s1 - s0) / (d1 - d0) if d1 > d0 else 0.0
@@ -178,15 +325,16 @@ def calibrate_bag(
         BagError: if the bag lacks the topics, or holds too few different held commands.
     """
     bag = bag if isinstance(bag, Bag) else Bag(bag)
-    points = steady_speeds(bag, command_topic, left_topic, right_topic)
-    curves = {wheel: _fit_curve(points[wheel], wheel, bag.path.name) for wheel in points}
+    held = held_commands(bag, command_topic, left_topic, right_topic)
+    curve, right_gain, turning = _fit_model(held, bag.path.name)
     profile = NoiseProfile.realistic(
         name=name,
         left_gain=1.0,
-        right_gain=1.0,
+        right_gain=right_gain,
         breakaway_pwm=None,
-        speed_curve=curves["left"],
-        right_speed_curve=curves["right"],
+        speed_curve=curve,
+        turning_resistance=turning,
     )
     replay = replay_bag(bag, profile, 0, command_topic, left_topic, right_topic)
-    return Calibration(profile, points, replay)
+    arcs = sum(command.arc for command in held)
+    return Calibration(profile, _points(held), replay, arcs)

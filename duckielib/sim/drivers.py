@@ -27,7 +27,7 @@ simulator_node              pub ``~ground_truth_pose`` (simulator only: no robot
 
 from __future__ import annotations
 
-from typing import Any, Sequence, Tuple
+from typing import Any, Optional, Sequence, Tuple
 
 from duckielib import leds as led_tables
 from duckielib.config import RobotConfig
@@ -165,11 +165,16 @@ class KinematicsNode:
         duty), ~limit (largest duty), ~v_max (m/s), ~omega_max (rad/s).
     """
 
-    def __init__(self, rospy: Any, veh: str, config: RobotConfig) -> None:
+    def __init__(
+        self, rospy: Any, veh: str, config: RobotConfig, gain: Optional[float] = None
+    ) -> None:
         self.msg = message_classes(rospy)
         self.rospy = rospy
         self.base = veh + "kinematics_node/"
-        for name, value in config.kinematics_params().items():
+        params = config.kinematics_params()
+        if gain is not None:
+            params["gain"] = gain  # the robot's calibration file
+        for name, value in params.items():
             if not rospy.has_param(self.base + name):
                 rospy.set_param(self.base + name, value)
         self.pub_wheels = rospy.Publisher(

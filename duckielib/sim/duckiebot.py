@@ -117,7 +117,10 @@ class VirtualDuckiebot:
             wheel: self._host(f"{wheel}_wheel_encoder_node", encoder(wheel))
             for wheel in ("left", "right")
         }
-        self._host("kinematics_node", lambda: drivers.KinematicsNode(rospy, veh, sim.config))
+        self._host(
+            "kinematics_node",
+            lambda: drivers.KinematicsNode(rospy, veh, sim.config, sim.noise.kinematics_gain),
+        )
         self._host("car_cmd_switch_node", lambda: drivers.CarCmdSwitchNode(rospy, veh))
         self._host("led_emitter_node", lambda: drivers.LEDEmitterNode(rospy, sim, veh))
         self._host("led_driver_node", lambda: drivers.LEDDriverNode(rospy, sim, veh))

@@ -1,6 +1,6 @@
 """Noise profiles: how far the virtual Duckiebot is from an ideal unicycle.
 
-A :class:`NoiseProfile` is a frozen set of the imperfections the simulator reproduces. Three
+A :class:`NoiseProfile` is a frozen set of the imperfections the simulator reproduces. Two
 profiles are named:
 
 - :meth:`NoiseProfile.ideal`: equal wheels, tyres that never slip, encoders sampled on a perfectly
@@ -8,15 +8,19 @@ profiles are named:
   any PWM out of the driver's dead zone turns a wheel (the driver's linear law, 27 rad/s at duty
   1). Each wheel's ticks match its travel up to quantisation: odometry follows the truth (the two
   wheels are still sampled at different instants, which only hard reversals show).
-- :meth:`NoiseProfile.realistic`: the right wheel is 3 % weaker than the left (so trim matters),
-  tyres slip when asked for more than the mat's friction gives (hard starts and stops), encoder
-  samples come a few milliseconds late or early and count by the encoder driver's rule, and a
-  wheel at rest needs a bit more than the driver's smallest PWM to break free.
-- :meth:`NoiseProfile.db21`: the realistic robot with motors and wheels as measured on real DB21
-  robots: a dead band up to duty 0.12, then about half the speed the driver's linear law
-  promises (3.65 rad/s at 0.30, 6.4 at 0.40), wheels 5 % smaller and a track 10 % wider than the
-  nominal ones odometry uses (tyres scrub in turns). At the robot's default kinematics gain it
-  drives at about 40 % of the commanded speed, and its odometry drifts as a real robot's does.
+- :meth:`NoiseProfile.realistic`: a robot like the real DB21s measured on the course's exercise
+  (public bags of wheel commands and encoder ticks). Its wheels turn at these speeds (rad/s,
+  real robots in brackets): 1.7 turning in place at duty 0.175 (1.6 to 2.0), 3.6 at 0.30 (3.6
+  to 3.7), 6.3 at 0.40 (6.1 to 6.7), and on an arc of 0.62 and 0.18, 6.7 outer and 5.1 inner
+  (6.7 to 7.3 and 5.0 to 5.4: the ground resists turning, so the slow wheel is dragged
+  along). That is a dead band up to duty 0.12, then about half the speed the driver's linear
+  law promises: at the default kinematics gain the robot drives at about half the commanded
+  speed. The right motor is 3 % weaker than the left (so trim matters); the wheels are 5 %
+  smaller and the track 10 % wider than the nominal ones odometry uses (tyres scrub in turns),
+  so odometry drifts as a real robot's does; tyres slip when asked for more than the mat's
+  friction gives; encoder samples come a few milliseconds late or early and count by the
+  encoder driver's rule (the sign of the last command); a wheel at rest needs the dead band's
+  edge to break free.
 
 Every parameter can be set on its own, starting from any of them::
 
@@ -39,20 +43,25 @@ from duckielib.errors import ConfigError
 __all__ = ["NoiseProfile", "noise_profile"]
 
 
-#: The db21 profile's steady wheel speed (rad/s) against the duty cycle, fitted to real DB21
-#: robots (``duckie sim motors``): a dead band up to 0.12, then 1.8 rad/s at 0.175 (turning in
-#: place, 1.6 to 2.0 measured), 3.65 at 0.30 (3.6 to 3.7), 6.4 at 0.40 (6.1 to 6.7), 9.5 at
-#: 0.62 and 14 at 1, about half the driver's linear law (27 rad/s at 1).
-DB21_SPEED_CURVE = (
+#: The realistic motors' speed (rad/s) against the duty cycle: a dead band up to 0.12, then
+#: about half the driver's linear law (27 rad/s at 1). On a straight line or turning in place
+#: the wheels turn at these speeds; on an arc :data:`REALISTIC_TURNING_RESISTANCE` drags the
+#: slow wheel along (``duckie sim motors`` sets them next to real DB21 robots').
+REALISTIC_SPEED_CURVE = (
     (0.12, 0.0),
     (0.175, 1.8),
     (0.30, 3.65),
     (0.40, 6.4),
-    (0.62, 9.5),
-    (1.0, 14.0),
+    (0.62, 10.4),
+    (1.0, 14.9),
 )
+#: How much the ground resists the realistic robot's turns while it rolls (see NoiseProfile).
+REALISTIC_TURNING_RESISTANCE = 0.65
+#: The realistic robot's calibrated kinematics gain: with it the robot drives within about
+#: 20 % of the speed asked from 0.1 to 0.3 m/s (at the default 1.0, at about 40 %).
+REALISTIC_KINEMATICS_GAIN = 2.0
 #: The PWM of duty 0.12 (the dead band's edge): a wheel at rest needs it to start.
-DB21_BREAKAWAY_PWM = 83
+REALISTIC_BREAKAWAY_PWM = 83
 
 
 @dataclass(frozen=True)
@@ -60,8 +69,7 @@ class NoiseProfile:
     """The imperfections of one simulated Duckiebot.
 
     Attributes:
-        name: the profile's name, for reports (``"ideal"``, ``"realistic"``, ``"db21"`` or
-            ``"custom"``).
+        name: the profile's name, for reports (``"ideal"``, ``"realistic"`` or ``"custom"``).
         left_gain: factor on the left motor's speed (1 is nominal).
         right_gain: factor on the right motor's speed (1 is nominal).
         friction_coefficient: tyre-to-mat friction coefficient; the largest force a wheel can
@@ -84,6 +92,13 @@ class NoiseProfile:
             up or down by the sign of the last wheel command (so a wheel still coasting
             forward after a reverse command counts down); False counts by the way the wheel
             really turns.
+        turning_resistance: how much the ground resists turning while the robot rolls, in
+            s/rad: half the difference of the speeds the motors alone would give is divided by
+            1 + turning_resistance * the wheels' mean speed (rad/s). On an arc the slow wheel
+            is dragged along by the fast one; turning in place is not slowed.
+        kinematics_gain: the kinematics gain in the robot's calibration file, which its
+            kinematics node starts with (``kinematics_node/gain``): a DB21's owner raises it
+            from the default 1.0 until the robot drives at about the speed asked.
     """
 
     name: str = "custom"
@@ -97,6 +112,8 @@ class NoiseProfile:
     wheel_radius_scale: float = 1.0
     baseline_scale: float = 1.0
     encoder_counts_by_command: bool = False
+    turning_resistance: float = 0.0
+    kinematics_gain: float = 1.0
 
     def __post_init__(self) -> None:
         for field in ("left_gain", "right_gain"):
@@ -126,6 +143,16 @@ class NoiseProfile:
                 raise ConfigError(
                     f"NoiseProfile.{field} must be a number between 0.5 and 2, not {value!r}."
                 )
+        gain = self.kinematics_gain
+        if not (_is_number(gain) and 0.1 <= gain <= 10):
+            raise ConfigError(
+                f"NoiseProfile.kinematics_gain must be a number between 0.1 and 10, not {gain!r}."
+            )
+        value = self.turning_resistance
+        if not (_is_number(value) and 0 <= value <= 20):
+            raise ConfigError(
+                f"NoiseProfile.turning_resistance must be a number between 0 and 20, not {value!r}."
+            )
         if not isinstance(self.encoder_counts_by_command, bool):
             raise ConfigError(
                 "NoiseProfile.encoder_counts_by_command must be True or False, "
@@ -142,27 +169,20 @@ class NoiseProfile:
 
     @classmethod
     def realistic(cls, **changes: object) -> NoiseProfile:
-        """Unequal wheels, slip at high acceleration, jittered encoders; ``changes`` override."""
+        """A robot like the real DB21s measured (module doc); ``changes`` override."""
         profile = cls(
             name="realistic",
             left_gain=1.0,
             right_gain=0.97,
             friction_coefficient=0.8,
             encoder_jitter_s=0.002,
-            breakaway_pwm=68,
-            encoder_counts_by_command=True,
-        )
-        return profile.replace(**changes)
-
-    @classmethod
-    def db21(cls, **changes: object) -> NoiseProfile:
-        """The realistic robot, its motors and wheels as measured on DB21s; ``changes`` override."""
-        profile = cls.realistic(
-            name="db21",
-            breakaway_pwm=DB21_BREAKAWAY_PWM,
-            speed_curve=DB21_SPEED_CURVE,
+            breakaway_pwm=REALISTIC_BREAKAWAY_PWM,
+            speed_curve=REALISTIC_SPEED_CURVE,
             wheel_radius_scale=0.95,
             baseline_scale=1.1,
+            encoder_counts_by_command=True,
+            turning_resistance=REALISTIC_TURNING_RESISTANCE,
+            kinematics_gain=REALISTIC_KINEMATICS_GAIN,
         )
         return profile.replace(**changes)
 
@@ -252,7 +272,7 @@ def _check_curve(curve: object, field: str) -> Tuple[Tuple[float, float], ...]:
 
 
 def noise_profile(profile: Union[str, os.PathLike, NoiseProfile]) -> NoiseProfile:
-    """The profile itself, the named one (``"ideal"``, ``"realistic"``, ``"db21"``) or a file.
+    """The profile itself, the named one (``"ideal"``, ``"realistic"``) or a file.
 
     A profile file is JSON, as :meth:`NoiseProfile.save` writes it (and ``duckie calibrate``):
     an object of the parameters that differ from the ideal profile's.
@@ -266,13 +286,11 @@ def noise_profile(profile: Union[str, os.PathLike, NoiseProfile]) -> NoiseProfil
         return NoiseProfile.ideal()
     if profile == "realistic":
         return NoiseProfile.realistic()
-    if profile == "db21":
-        return NoiseProfile.db21()
     path = Path(profile)
     if path.suffix == ".json" or path.is_file():
         return NoiseProfile.load(path)
     raise ConfigError(
-        f"There is no noise profile called {str(profile)!r}; use 'ideal', 'realistic', 'db21', "
+        f"There is no noise profile called {str(profile)!r}; use 'ideal', 'realistic', "
         "a profile file (robot.json) or a NoiseProfile."
     )
 

@@ -40,6 +40,7 @@ __all__ = [
     "Robot",
     "pwm_from_duty",
     "steady_speed",
+    "loaded_speeds",
     "MOTOR_TIME_CONSTANT_S",
     "WHEEL_LOAD_FRACTION",
     "GRAVITY",
@@ -144,6 +145,18 @@ def steady_speed(curve: Sequence[Tuple[float, float]], duty: float) -> float:
     return s0 + (s1 - s0) * (duty - d0) / (d1 - d0)
 
 
+def loaded_speeds(left: float, right: float, turning: float) -> Tuple[float, float]:
+    """The wheels' steady speeds (rad/s) on the ground, from the speeds the motors alone give.
+
+    The ground resists turning while the robot rolls: half the wheels' speed difference is
+    divided by ``1 + turning * |mean speed|``. On an arc the slow wheel is dragged along by the
+    fast one; turning in place is not slowed.
+    """
+    mean = 0.5 * (left + right)
+    half_difference = 0.5 * (right - left) / (1.0 + turning * abs(mean))
+    return mean - half_difference, mean + half_difference
+
+
 class Motor:
     """One wheel's motor: duty cycle in, wheel angular speed out.
 
@@ -200,13 +213,23 @@ class Motor:
             fraction = (pwm - config.pwm_min) / (config.pwm_max - config.pwm_min)
             self._drive = math.copysign(self._full_scale * fraction, duty)
 
-    def update(self) -> float:
-        """Advance the speed by one physics step and return it, in rad/s."""
-        target = self._drive
+    def target(self) -> float:
+        """The speed the motor alone drives the wheel towards, in rad/s.
+
+        It is 0 while the wheel rests and the PWM is below the breakaway PWM.
+        """
         if self.pwm < self._breakaway and -REST_SPEED < self.speed < REST_SPEED:
-            target = 0.0
+            return 0.0
+        return self._drive
+
+    def follow(self, target: float) -> float:
+        """Advance the speed by one physics step towards ``target`` and return it, in rad/s."""
         self.speed += (target - self.speed) * self._alpha
         return self.speed
+
+    def update(self) -> float:
+        """Advance the speed by one physics step towards :meth:`target` and return it."""
+        return self.follow(self.target())
 
 
 class Robot:
@@ -279,14 +302,20 @@ class Robot:
         right_curve = curve if noise.right_speed_curve is None else noise.right_speed_curve
         self.left = Motor(config, noise.left_gain, breakaway, alpha, curve)
         self.right = Motor(config, noise.right_gain, breakaway, alpha, right_curve)
+        self._turning = noise.turning_resistance
 
     def drive(self) -> Tuple[float, float]:
         """Advance both motors by one step and aim the tyres; return the wheel speeds in rad/s.
 
         Call it just before stepping the space.
         """
-        left = self.left.update()
-        right = self.right.update()
+        if self._turning:
+            left, right = loaded_speeds(self.left.target(), self.right.target(), self._turning)
+            left = self.left.follow(left)
+            right = self.right.follow(right)
+        else:
+            left = self.left.update()
+            right = self.right.update()
         body = self.body
         omega = body.angular_velocity
         # pymunk moves the body with the velocity it solved in the previous step, so the

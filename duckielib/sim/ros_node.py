@@ -136,7 +136,9 @@ class VirtualDuckiebotNode:
             "wheels_driver_node": drivers.WheelsDriverNode(rospy, locked, veh),
             "left_wheel_encoder_node": drivers.WheelEncoderNode(rospy, locked, veh, "left"),
             "right_wheel_encoder_node": drivers.WheelEncoderNode(rospy, locked, veh, "right"),
-            "kinematics_node": drivers.KinematicsNode(rospy, veh, sim.config),
+            "kinematics_node": drivers.KinematicsNode(
+                rospy, veh, sim.config, sim.noise.kinematics_gain
+            ),
             "car_cmd_switch_node": drivers.CarCmdSwitchNode(rospy, veh),
             "led_emitter_node": drivers.LEDEmitterNode(rospy, locked, veh),
             "led_driver_node": drivers.LEDDriverNode(rospy, locked, veh),

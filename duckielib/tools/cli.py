@@ -297,8 +297,8 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         "--noise",
         default="ideal",
         type=_noise,
-        help="the simulated robot: ideal, realistic (unequal wheels, slip, dead zone), db21 "
-        "(motors as measured on real DB21s), or a profile file duckie calibrate wrote",
+        help="the simulated robot: ideal (default), realistic (motors, wheels and drift as "
+        "measured on real DB21s), or a profile file duckie calibrate wrote",
     )
     mission.add_argument(
         "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
@@ -315,10 +315,10 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
 
 def _noise(text: str) -> str:
     """A noise profile from the command line: ``ideal``, ``realistic`` or a profile file."""
-    if text in ("ideal", "realistic", "db21") or text.endswith(".json"):
+    if text in ("ideal", "realistic") or text.endswith(".json"):
         return text
     raise argparse.ArgumentTypeError(
-        f"give ideal, realistic, db21 or a profile file (robot.json), not {text!r}"
+        f"give ideal, realistic or a profile file (robot.json), not {text!r}"
     )
 
 
@@ -350,7 +350,7 @@ def _add_simulator(commands: argparse._SubParsersAction) -> None:
         "--noise",
         default="realistic",
         type=_noise,
-        help="the simulated robot: ideal, realistic (default), db21 or a profile file (.json)",
+        help="the simulated robot: ideal, realistic (default) or a profile file (.json)",
     )
     replay.add_argument("--seed", type=_seed, default=0, help="the simulator's seed (default 0)")
     _add_replay_topics(replay)
@@ -364,7 +364,7 @@ def _add_simulator(commands: argparse._SubParsersAction) -> None:
         "--noise",
         default="realistic",
         type=_noise,
-        help="the simulated robot: ideal, realistic (default), db21 or a profile file (.json)",
+        help="the simulated robot: ideal, realistic (default) or a profile file (.json)",
     )
     motors.set_defaults(handler=_sim_motors)
 

@@ -11,15 +11,18 @@ from duckielib.missions import SQUARE_THEN_CIRCLE
 from duckielib.tools.runner import run_mission
 
 
-def test_the_sample_is_a_whole_mission_that_passes_every_check():
+def test_the_sample_is_a_whole_mission_whose_odometry_drifts_as_a_real_robots():
     assert SAMPLES == ["square_then_circle_realistic"]
     report = mission_report(sample_bag(), SQUARE_THEN_CIRCLE)
     assert [state.name for state in report.states] == [s.name for s in SQUARE_THEN_CIRCLE.states]
     assert report.states_in_order
     assert report.stops_held
     assert report.finished
-    assert report.closed
-    assert report.problems == []
+    # Its odometry believes it is home; by the ground truth it ended tens of centimetres away.
+    assert not report.closed
+    assert 0.2 < report.distance_to_start < 0.7
+    assert len(report.problems) == 1
+    assert "the difference is odometry's drift" in report.problems[0]
 
 
 @pytest.mark.slow

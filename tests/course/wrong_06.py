@@ -159,15 +159,15 @@ class AngleTracker:
 """,
     },
     "sweep_speeds": {
-        "no speed too slow for the wheels": """SWEEP_SPEEDS = (0.05, 0.1, 0.2, 0.3, 0.45, 0.6)
+        "no speed too slow for the wheels": """SWEEP_SPEEDS = (0.06, 0.1, 0.2, 0.3, 0.4)
 """,
-        "fewer than four speeds": """SWEEP_SPEEDS = (0.03, 0.2, 0.6)
+        "fewer than four speeds": """SWEEP_SPEEDS = (0.03, 0.2, 0.4)
 """,
-        "one speed repeated": """SWEEP_SPEEDS = (0.03, 0.2, 0.2, 0.6)
+        "one speed repeated": """SWEEP_SPEEDS = (0.03, 0.2, 0.2, 0.4)
 """,
         "every speed too slow to move the robot": """SWEEP_SPEEDS = (0.01, 0.02, 0.025, 0.03)
 """,
-        "nothing fast": """SWEEP_SPEEDS = (0.02, 0.05, 0.1, 0.15)
+        "nothing fast": """SWEEP_SPEEDS = (0.02, 0.05, 0.1, 0.12)
 """,
         "faster than the robot can go": """SWEEP_SPEEDS = (0.03, 0.1, 0.5, 1.0)
 """,

@@ -62,6 +62,8 @@ def test_unknown_parameter_names_the_known_ones():
         {"speed_curve": ((0.1, -1.0), (1.0, 10.0))},
         {"speed_curve": ((0.1, 0.0),)},
         {"speed_curve": "fast"},
+        {"turning_resistance": -0.5},
+        {"turning_resistance": math.nan},
     ],
 )
 def test_impossible_values_are_rejected(changes):
@@ -72,13 +74,14 @@ def test_impossible_values_are_rejected(changes):
 def test_profiles_by_name():
     assert noise_profile("ideal") == NoiseProfile.ideal()
     assert noise_profile("realistic") == NoiseProfile.realistic()
-    assert noise_profile("db21") == NoiseProfile.db21()
-    assert NoiseProfile.db21().speed_curve[0] == (0.12, 0.0)  # the measured dead band
+    assert NoiseProfile.realistic().speed_curve[0] == (0.12, 0.0)  # the measured dead band
     custom = NoiseProfile(right_gain=0.9)
     assert noise_profile(custom) is custom
     assert Simulator(noise="realistic").noise == NoiseProfile.realistic()
     with pytest.raises(ConfigError, match="no noise profile called 'noisy'"):
         noise_profile("noisy")
+    with pytest.raises(ConfigError, match="no noise profile called 'db21'"):
+        noise_profile("db21")  # the measured robot is the realistic one
 
 
 def steady(noise, duty, seconds=2.0):
