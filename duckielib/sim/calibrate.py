@@ -23,7 +23,8 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import dataclass
-from typing import Dict, List, Optional, Tuple, Union
+from pathlib import Path
+from typing import Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -32,7 +33,16 @@ from duckielib.errors import BagError
 from duckielib.sim.noise import NoiseProfile
 from duckielib.sim.replay import ReplayReport, replay_bag, wheel_commands
 
-__all__ = ["Calibration", "Held", "calibrate_bag", "held_commands", "steady_speeds"]
+__all__ = [
+    "CALIBRATION_DRIVE",
+    "Calibration",
+    "Held",
+    "calibrate_bag",
+    "calibration_driver",
+    "held_commands",
+    "record_calibration_drive",
+    "steady_speeds",
+]
 
 #: The shortest command that counts as held, and the part of it measured (its second half).
 HOLD_S = 1.0
@@ -45,6 +55,8 @@ STILL = 0.1
 #: The last part of a held command left out of its measure, in seconds: encoders that count by
 #: the command's sign count the next command's way as soon as it comes.
 EDGE_S = 0.1
+#: The speed the fitted kinematics gain makes right, m/s (the course's driving speed).
+GAIN_SPEED = 0.2
 #: The largest turning resistance tried (s/rad).
 TURNING_MAX = 3.0
 _WHAT_TO_RECORD = (
@@ -54,6 +66,19 @@ _WHAT_TO_RECORD = (
 )
 
 PathLike = Union[str, "os.PathLike[str]"]
+
+#: The wheel commands to record for a calibration, as (left duty, right duty, seconds): five
+#: speeds straight ahead, turns in place both ways, and arcs mixing the speeds, each held 2 s
+#: with a 1 s stop after it. About 50 s; the robot needs about 2 m of free floor ahead.
+CALIBRATION_DRIVE: Tuple[Tuple[float, float, float], ...] = tuple(
+    step
+    for left, right in (
+        (0.15, 0.15), (0.2, 0.2), (0.3, 0.3), (0.4, 0.4), (0.55, 0.55),
+        (-0.3, 0.3), (0.3, -0.3), (-0.45, 0.45), (0.45, -0.45),
+        (0.2, 0.4), (0.4, 0.2), (0.3, 0.55), (0.55, 0.3),
+    )
+    for step in ((left, right, 2.0), (0.0, 0.0, 1.0))
+)  # fmt: skip
 Curve = Tuple[Tuple[float, float], ...]
 
 
@@ -85,6 +110,7 @@ class Calibration:
                 speed = gains[wheel] * _speed_on(curve, duty)
                 figures[f"calibration_speed_at_{duty:g}_{wheel}"] = round(speed, 3)
         figures["calibration_right_gain"] = self.profile.right_gain
+        figures["calibration_kinematics_gain"] = self.profile.kinematics_gain
         figures["calibration_held_arcs"] = self.arcs
         figures["calibration_turning_resistance"] = self.profile.turning_resistance
         figures["calibration_tick_rate_rms"] = round(self.replay.tick_rate_rms, 3)
@@ -304,6 +330,32 @@ def _fit_curve(points: List[Tuple[float, float]], bag: str) -> Curve:
     return tuple((round(duty, 4), round(speed, 4)) for duty, speed in knots)
 
 
+def _kinematics_gain(profile: NoiseProfile) -> float:
+    """The kinematics gain with which the robot drives :data:`GAIN_SPEED` when asked.
+
+    The kinematics node turns the speed asked into the duty ``gain * (v / R) / k``; the gain
+    is the one whose duty turns the wheels (the mean of both motors) at the speed that moves
+    the robot's true wheels at ``v``.
+    """
+    from duckielib.config import DB21
+    from duckielib.sim.robot import steady_speed
+
+    curve = profile.speed_curve or ()
+    mean_gain = 0.5 * (profile.left_gain + profile.right_gain)
+    asked = GAIN_SPEED / DB21.radius  # rad/s, as the kinematics node computes it
+    wanted = GAIN_SPEED / (DB21.radius * profile.wheel_radius_scale)
+    low, high = 0.0, 1.0
+    if mean_gain * steady_speed(curve, high) < wanted:
+        return round(min(10.0, high * DB21.k / asked), 3)  # even duty 1 is too slow
+    for _ in range(40):
+        middle = 0.5 * (low + high)
+        if mean_gain * steady_speed(curve, middle) < wanted:
+            low = middle
+        else:
+            high = middle
+    return round(max(0.1, high * DB21.k / asked), 3)
+
+
 def calibrate_bag(
     bag: Union[Bag, PathLike],
     name: str = "calibrated",
@@ -335,6 +387,75 @@ def calibrate_bag(
         speed_curve=curve,
         turning_resistance=turning,
     )
+    profile = profile.replace(name=name, kinematics_gain=_kinematics_gain(profile))
     replay = replay_bag(bag, profile, 0, command_topic, left_topic, right_topic)
     arcs = sum(command.arc for command in held)
     return Calibration(profile, _points(held), replay, arcs)
+
+
+def calibration_driver(drive: Sequence[Tuple[float, float, float]] = CALIBRATION_DRIVE) -> None:
+    """A node that drives the wheels through ``drive``, then stops them and returns.
+
+    It publishes each (left, right) duty cycle on ``wheels_driver_node/wheels_cmd`` at 10 Hz
+    for its seconds, as a wheel calibration on a real Duckiebot would (record that topic and
+    both encoders' ticks with ``rosbag record``). Launch it on the virtual Duckiebot with
+    ``bot.launch(calibration_driver)``.
+    """
+    import rospy
+    from duckietown_msgs.msg import WheelsCmdStamped
+
+    rospy.init_node("calibration_driver")
+    wheels = rospy.Publisher("wheels_driver_node/wheels_cmd", WheelsCmdStamped, queue_size=1)
+
+    def stop() -> None:
+        wheels.publish(WheelsCmdStamped(vel_left=0.0, vel_right=0.0))
+
+    rospy.on_shutdown(stop)
+    rate = rospy.Rate(10)
+    for left, right, seconds in drive:
+        end = rospy.get_time() + seconds
+        while not rospy.is_shutdown() and rospy.get_time() < end - 1e-6:
+            message = WheelsCmdStamped(vel_left=left, vel_right=right)
+            message.header.stamp = rospy.Time.now()
+            wheels.publish(message)
+            rate.sleep()
+    stop()
+
+
+def record_calibration_drive(
+    path: PathLike,
+    noise: Union[str, NoiseProfile] = "realistic",
+    seed: int = 0,
+    drive: Sequence[Tuple[float, float, float]] = CALIBRATION_DRIVE,
+) -> Path:
+    """Drive :func:`calibration_driver` on a virtual Duckiebot and record the bag to calibrate.
+
+    The bag holds the wheel commands and both encoders' ticks, as ``rosbag record`` would on a
+    real robot. Returns its path.
+
+    Raises:
+        BagError: if the bag exists already.
+    """
+    from duckielib.bags.recorder import BagRecorder
+    from duckielib.ros import Graph
+    from duckielib.sim.duckiebot import VirtualDuckiebot
+    from duckielib.sim.world import World
+
+    world = World(tiles_x=12, tiles_y=12)
+    start = (world.width / 2, world.height / 2, 0.0)
+    bot = VirtualDuckiebot(
+        seed=seed, noise=noise, graph=Graph(echo_logs=False), world=world, start_pose=start
+    )
+    topics = [
+        bot.namespace + "wheels_driver_node/wheels_cmd",
+        bot.namespace + "left_wheel_encoder_node/tick",
+        bot.namespace + "right_wheel_encoder_node/tick",
+    ]
+    recorder = BagRecorder(path, topics, graph=bot.graph)
+    try:
+        bot.launch(calibration_driver, list(drive))
+        bot.run(sum(seconds for _, _, seconds in drive) + 1.0)
+    finally:
+        recorder.close()
+        bot.shutdown()
+    return recorder.path

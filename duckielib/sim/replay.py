@@ -96,7 +96,8 @@ class ReplayReport:
         left, right: each wheel's comparison.
         tick_rate_rms: the 1 s tick-rate error over both wheels, in ticks per second.
         real_ticks, sim_ticks: each wheel's counts at the compared times, from 0 (for plots).
-        t: those times, in seconds from the first command.
+        t: each wheel's compared times (its real encoder's readings), in seconds from the
+            first command.
     """
 
     bag: str
@@ -107,7 +108,7 @@ class ReplayReport:
     left: WheelReplay
     right: WheelReplay
     tick_rate_rms: float
-    t: np.ndarray
+    t: Tuple[np.ndarray, np.ndarray]
     real_ticks: Tuple[np.ndarray, np.ndarray]
     sim_ticks: Tuple[np.ndarray, np.ndarray]
 
@@ -245,7 +246,6 @@ def replay_bag(
         real_travel, sim_travel = _travel(real), _travel(simulated)
         ratio = sim_travel / real_travel if real_travel else math.nan
         sides.append(WheelReplay(wheel, real_travel, sim_travel, ratio, _rms(error)))
-    common_t = kept[0][0] - start
     return ReplayReport(
         bag=bag.path.name,
         noise=profile.name,
@@ -255,7 +255,7 @@ def replay_bag(
         left=sides[0],
         right=sides[1],
         tick_rate_rms=_rms(np.concatenate(errors)),
-        t=common_t,
+        t=(kept[0][0] - start, kept[1][0] - start),
         real_ticks=(kept[0][1] - kept[0][1][0], kept[1][1] - kept[1][1][0]),
         sim_ticks=(sampled[0] - sampled[0][0], sampled[1] - sampled[1][0]),
     )

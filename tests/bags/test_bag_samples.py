@@ -12,7 +12,7 @@ from duckielib.tools.runner import run_mission
 
 
 def test_the_sample_is_a_whole_mission_whose_odometry_drifts_as_a_real_robots():
-    assert SAMPLES == ["square_then_circle_realistic"]
+    assert SAMPLES == ["calibration_drive", "square_then_circle_realistic"]
     report = mission_report(sample_bag(), SQUARE_THEN_CIRCLE)
     assert [state.name for state in report.states] == [s.name for s in SQUARE_THEN_CIRCLE.states]
     assert report.states_in_order

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from duckielib.bags import BagWriter
+from duckielib.bags import Bag, BagWriter
 from duckielib.errors import BagError
 from duckielib.messages import Header, WheelEncoderStamped, WheelsCmdStamped
 from duckielib.rostime import Time
@@ -205,3 +205,44 @@ def test_the_realistic_profile_gives_the_real_robots_figures_and_their_drift(tmp
     ideal = run_mission(out=tmp_path / "ideal", noise="ideal", seed=0, animation=False)
     assert ideal.summary["odometry_error"]["distance"] < 0.01
     assert not ideal.report.problems
+
+
+def test_the_calibration_drive_recorded_on_the_realistic_robot_calibrates_back_to_it(tmp_path):
+    from duckielib.sim.calibrate import CALIBRATION_DRIVE, record_calibration_drive
+
+    bag = record_calibration_drive(tmp_path / "calibration.bag", "realistic", seed=2)
+    counts = {name.rsplit("/", 2)[-2]: info.count for name, info in Bag(bag).topics.items()}
+    seconds = sum(step[2] for step in CALIBRATION_DRIVE)
+    assert counts["wheels_driver_node"] == pytest.approx(10 * seconds, abs=5)  # 10 Hz
+    assert counts["left_wheel_encoder_node"] == pytest.approx(30 * (seconds + 1), abs=5)
+    calibration = calibrate_bag(bag)
+    realistic = NoiseProfile.realistic()
+    fitted = calibration.profile
+    assert fitted.right_gain == pytest.approx(realistic.right_gain, rel=0.01)
+    assert fitted.turning_resistance == pytest.approx(realistic.turning_resistance, rel=0.05)
+    for duty in (0.2, 0.3, 0.4, 0.5):
+        assert steady_speed(fitted.speed_curve, duty) == pytest.approx(
+            steady_speed(realistic.speed_curve, duty), rel=0.05
+        ), duty
+    # The kinematics gain that makes the robot drive 0.2 m/s when asked, and it does.
+    assert 1.7 < fitted.kinematics_gain < 1.9
+    assert calibration.figures()["calibration_kinematics_gain"] == fitted.kinematics_gain
+
+
+def test_the_sample_calibration_bag_fits_its_robot_and_the_realistic_one_does_not():
+    from duckielib.bags import sample_bag
+    from duckielib.bags.samples import CALIBRATION_SAMPLE_ROBOT
+
+    bag = sample_bag("calibration_drive")
+    calibration = calibrate_bag(bag)
+    assert calibration.profile.right_gain == pytest.approx(0.93, rel=0.02)
+    assert calibration.profile.turning_resistance == pytest.approx(0.9, rel=0.05)
+    assert calibration.profile.speed_curve[0][0] == pytest.approx(0.15, abs=0.01)
+    assert steady_speed(calibration.profile.speed_curve, 0.4) == pytest.approx(
+        steady_speed(CALIBRATION_SAMPLE_ROBOT["speed_curve"], 0.4), rel=0.03
+    )
+    assert calibration.replay.left.travel_ratio == pytest.approx(1.0, abs=0.02)
+    realistic = replay_bag(bag, "realistic")
+    assert realistic.left.travel_ratio > 1.2  # the sample's motors are weaker
+    assert len(realistic.t[0]) == len(realistic.real_ticks[0]) == len(realistic.sim_ticks[0])
+    assert len(realistic.t[1]) == len(realistic.real_ticks[1]) == len(realistic.sim_ticks[1])
