@@ -14,10 +14,10 @@ To record it again (instructors, after the simulator or the recorded topics chan
 ``calibration_drive`` stands in for a bag of your own robot's wheel calibration (notebook 10):
 :func:`~duckielib.sim.calibrate.calibration_driver`'s commands and both encoders' ticks,
 recorded on a virtual Duckiebot whose motors are weaker than the realistic one's
-(:data:`CALIBRATION_SAMPLE_ROBOT`: a dead band up to duty 0.15, a right motor 7 % weaker, a
-ground that resists turns more). To record it again::
+(:data:`duckielib.sim.calibrate.CALIBRATION_SAMPLE_ROBOT`: a dead band up to duty 0.15, a
+right motor 7 % weaker, a ground that resists turns more). To record it again::
 
-    python -c "from duckielib.bags.samples import record_calibration_sample as r; r('c.bag')"
+    python -c "from duckielib.sim.calibrate import record_calibration_sample as r; r('c.bag')"
     duckie bag repair c.bag compressed.bag --compression bz2
     cp compressed.bag duckielib/bags/data/calibration_drive.bag
 """
@@ -25,11 +25,11 @@ ground that resists turns more). To record it again::
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Dict, List, Union
+from typing import List
 
 from duckielib.errors import BagError
 
-__all__ = ["CALIBRATION_SAMPLE_ROBOT", "SAMPLES", "record_calibration_sample", "sample_bag"]
+__all__ = ["SAMPLES", "sample_bag"]
 
 _FOLDER = Path(__file__).resolve().parent / "data"
 
@@ -47,21 +47,3 @@ def sample_bag(name: str = "square_then_circle_realistic") -> Path:
     if not path.is_file():
         raise BagError(f"There is no sample bag {name!r}; the samples are: {', '.join(SAMPLES)}.")
     return path
-
-
-#: The robot of the ``calibration_drive`` sample: the realistic profile's parameters changed.
-CALIBRATION_SAMPLE_ROBOT: Dict[str, Any] = {
-    "name": "calibration_sample",
-    "speed_curve": ((0.15, 0.0), (0.2, 1.5), (0.3, 3.0), (0.4, 5.2), (0.55, 7.8), (1.0, 13.0)),
-    "breakaway_pwm": 89,
-    "right_gain": 0.93,
-    "turning_resistance": 0.9,
-}
-
-
-def record_calibration_sample(path: Union[str, Path]) -> Path:
-    """Record the ``calibration_drive`` sample (module doc) to ``path``; return its path."""
-    from duckielib.sim.calibrate import record_calibration_drive
-    from duckielib.sim.noise import NoiseProfile
-
-    return record_calibration_drive(path, NoiseProfile.realistic(**CALIBRATION_SAMPLE_ROBOT))

@@ -24,7 +24,7 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -38,9 +38,11 @@ __all__ = [
     "Calibration",
     "Held",
     "calibrate_bag",
+    "CALIBRATION_SAMPLE_ROBOT",
     "calibration_driver",
     "held_commands",
     "record_calibration_drive",
+    "record_calibration_sample",
     "steady_speeds",
 ]
 
@@ -402,8 +404,10 @@ def calibration_driver(drive: Sequence[Tuple[float, float, float]] = CALIBRATION
     ``bot.launch(calibration_driver)``.
     """
     import rospy
-    from duckietown_msgs.msg import WheelsCmdStamped
 
+    from duckielib.ros.backend import message_classes
+
+    WheelsCmdStamped = message_classes(rospy).WheelsCmdStamped  # noqa: N806 - a class
     rospy.init_node("calibration_driver")
     wheels = rospy.Publisher("wheels_driver_node/wheels_cmd", WheelsCmdStamped, queue_size=1)
 
@@ -459,3 +463,20 @@ def record_calibration_drive(
         recorder.close()
         bot.shutdown()
     return recorder.path
+
+
+#: The robot of the course's ``calibration_drive`` sample bag (:mod:`duckielib.bags.samples`):
+#: the realistic profile with weaker motors (a dead band up to duty 0.15), a right motor 7 %
+#: weaker, and a ground that resists turns more.
+CALIBRATION_SAMPLE_ROBOT: Dict[str, Any] = {
+    "name": "calibration_sample",
+    "speed_curve": ((0.15, 0.0), (0.2, 1.5), (0.3, 3.0), (0.4, 5.2), (0.55, 7.8), (1.0, 13.0)),
+    "breakaway_pwm": 89,
+    "right_gain": 0.93,
+    "turning_resistance": 0.9,
+}
+
+
+def record_calibration_sample(path: PathLike) -> Path:
+    """Record the ``calibration_drive`` sample bag's drive, uncompressed, to ``path``."""
+    return record_calibration_drive(path, NoiseProfile.realistic(**CALIBRATION_SAMPLE_ROBOT))

@@ -231,7 +231,7 @@ def test_the_calibration_drive_recorded_on_the_realistic_robot_calibrates_back_t
 
 def test_the_sample_calibration_bag_fits_its_robot_and_the_realistic_one_does_not():
     from duckielib.bags import sample_bag
-    from duckielib.bags.samples import CALIBRATION_SAMPLE_ROBOT
+    from duckielib.sim.calibrate import CALIBRATION_SAMPLE_ROBOT
 
     bag = sample_bag("calibration_drive")
     calibration = calibrate_bag(bag)
