@@ -8,8 +8,11 @@ Motors mirror the wheels driver. A duty cycle u in [-1, 1] becomes a PWM value
 (:func:`pwm_from_duty`: 0 in the dead zone, else ``floor(|u| * (pwm_max - pwm_min) + pwm_min)``);
 the motor's steady speed is ``k * gain * (pwm - pwm_min) / (pwm_max - pwm_min)`` rad/s, the PWM
 offset being what overcomes the gearbox's friction (so duty 1 gives k = 27 rad/s). A wheel at
-rest stays at rest below the noise profile's breakaway PWM (static friction). The speed follows
-its target with a first-order lag of time constant :data:`MOTOR_TIME_CONSTANT_S`.
+rest stays at rest below the noise profile's breakaway PWM (static friction). A noise profile
+may give a measured speed curve instead of that linear law (``speed_curve``), and a ground that
+resists turning while the robot rolls (``turning_resistance``, :func:`loaded_speeds`): both
+wheels' targets then come from both motors. The speed follows its target with a first-order lag
+of time constant :data:`MOTOR_TIME_CONSTANT_S`.
 
 Tyres: each wheel is a velocity constraint between the chassis at the wheel's contact point and
 a kinematic "ground" body moving at the wheel's rim speed along the heading. Its force is capped
