@@ -8,9 +8,11 @@ ways give each motor's speed curve: the dead band (the largest command that does
 wheel, extended from the two slowest speeds) and a knot at every command measured, extended in
 a straight line to duty 1. The arcs (both wheels the same way, at different commands) give
 the ground's resistance to turning, the value that best predicts how far their slow wheel was
-dragged along. The fitted profile keeps the realistic profile's other imperfections (wheel
-size and track, slip, encoder jitter, the encoder driver's counting rule: encoders alone
-cannot measure them) and is checked by replaying the bag's commands into it (:mod:`.replay`).
+dragged along (without arcs, straight runs set against turns in place give it roughly; with
+straight runs only, it is left at 0). The fitted profile keeps the realistic profile's other
+imperfections (wheel size and track, slip, encoder jitter, the encoder driver's counting rule:
+encoders alone cannot measure them) and is checked by replaying the bag's commands into it
+(:mod:`.replay`).
 
 ``duckie calibrate BAG -o robot.json`` writes the profile; ``duckie mission --noise
 robot.json`` then drives a simulated robot that behaves like yours.
@@ -277,8 +279,8 @@ def _fit_model(held: List[Held], bag: str) -> Tuple[Curve, float, float]:
         return total, curve
 
     turnings = [step * 0.05 for step in range(round(TURNING_MAX / 0.05) + 1)]
-    if not any(command.arc for command in held):
-        turnings = [0.0]
+    if all(abs(command.left_duty - command.right_duty) < LEVEL_STEP for command in held):
+        turnings = [0.0]  # only straight runs: the ground's resistance to turns is not seen
     best = (math.inf, 1.0, 0.0)
     for gain_step in range(-30, 31):
         for turning in turnings:

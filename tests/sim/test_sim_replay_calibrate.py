@@ -246,3 +246,18 @@ def test_the_sample_calibration_bag_fits_its_robot_and_the_realistic_one_does_no
     assert realistic.left.travel_ratio > 1.2  # the sample's motors are weaker
     assert len(realistic.t[0]) == len(realistic.real_ticks[0]) == len(realistic.sim_ticks[0])
     assert len(realistic.t[1]) == len(realistic.real_ticks[1]) == len(realistic.sim_ticks[1])
+
+
+def test_without_arcs_the_straight_runs_and_turns_in_place_still_tell_the_wheels_apart(tmp_path):
+    # Driving straight, the ground's resistance to turns hides part of the right motor's
+    # weakness; turning in place it does not: the two together give both.
+    straight_and_in_place = [step for step in DRIVE if not (step[0] > 0 and step[0] != step[1])]
+    bag = record_drive(tmp_path / "no_arcs.bag", UNUSUAL, drive=straight_and_in_place)
+    calibration = calibrate_bag(bag)
+    assert calibration.figures()["calibration_held_arcs"] == 0
+    assert calibration.profile.right_gain == pytest.approx(0.85, rel=0.02)
+    assert calibration.profile.turning_resistance == pytest.approx(TRUE_TURNING, rel=0.15)
+    # Straight runs alone cannot tell the two apart: no turning resistance is fitted.
+    only_straight = [step for step in DRIVE if step[0] == step[1]]
+    straight = calibrate_bag(record_drive(tmp_path / "straight.bag", UNUSUAL, drive=only_straight))
+    assert straight.profile.turning_resistance == 0.0
