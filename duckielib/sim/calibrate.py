@@ -263,12 +263,13 @@ def _fit_model(held: List[Held], bag: str) -> Tuple[Curve, float, float]:
     moving = [
         command for command in held if not command.arc and (command.left_duty or command.right_duty)
     ]
-    if not _curve_points(moving, 1.0, 0.0):
+    first_points = _curve_points(moving, 1.0, 0.0)
+    if not first_points:
         raise BagError(
             f"{bag} holds no command that drives both wheels straight or turns in place, held "
             "1 s or more. " + _WHAT_TO_RECORD
         )
-    _fit_curve(_curve_points(moving, 1.0, 0.0), bag)  # a sentence if too few levels
+    _fit_curve(first_points, bag)  # a sentence if too few levels
 
     def error(right_gain: float, turning: float) -> Tuple[float, Curve]:
         curve = _fit_curve(_curve_points(moving, right_gain, turning), bag)
