@@ -22,6 +22,7 @@ LAPTOP_ONLY = (
     "matplotlib",
     "rospy",
     "PIL",
+    "ipywidgets",
     "nbgrader",
     "jupyterlab",
     "greenlet",

@@ -9,6 +9,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from duckielib.bags import Bag, BagWriter
@@ -146,6 +147,44 @@ def test_the_realistic_robot_reports_its_figures(reference, tmp_path):
     assert run.summary["odometry_error"]["distance"] >= 0
     assert run.files["animation"].read_bytes()[:6] == b"GIF89a"
     assert "realistic robot (seed 3)" in run.text()
+
+
+def strip_colors(frame, colors, tolerance=24, least=1500):
+    """The names of ``colors`` ({name: rgb}) that fill the LED strip above the mat in ``frame``."""
+    top = frame[: frame.shape[0] // 10].astype(int)
+    return [
+        name
+        for name, rgb in colors.items()
+        if np.all(np.abs(top - rgb) <= tolerance, axis=2).sum() >= least
+    ]
+
+
+def test_the_mission_animation_shows_each_states_lights_in_order(reference, tmp_path):
+    from PIL import Image, ImageSequence
+
+    from duckielib.leds import pattern_colors, pattern_named
+
+    run = run_mission(reference, out=tmp_path, animation=True)
+    wanted = [state.color for state in run.report.states]
+    colors = {
+        name: np.round(np.asarray(pattern_colors(pattern_named(name))[0]) * 255)
+        for name in set(wanted)
+    }
+    seen = []
+    with Image.open(run.files["animation"]) as gif:
+        assert gif.size[0] >= 800
+        assert gif.n_frames >= 60
+        for frame in ImageSequence.Iterator(gif):
+            shown = strip_colors(np.asarray(frame.convert("RGB")), colors)
+            assert len(shown) <= 1
+            if shown and (not seen or seen[-1] != shown[0]):
+                seen.append(shown[0])
+    # Every state's colour shows, in the states' order (states in a row with one colour
+    # show as one).
+    in_order = [
+        name for index, name in enumerate(wanted) if index == 0 or wanted[index - 1] != name
+    ]
+    assert seen == in_order
 
 
 def test_an_unwritten_part_names_the_notebook_to_finish(tmp_path):

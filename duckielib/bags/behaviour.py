@@ -32,6 +32,7 @@ __all__ = [
     "STOP_TOLERANCE_S",
     "MissionReport",
     "StateRun",
+    "led_messages",
     "mission_report",
 ]
 
@@ -182,20 +183,28 @@ def _pattern_name(message: Any) -> str:
     return "custom" if "custom" in message.color_list else "unknown"
 
 
-def _led_changes(bag: Bag, topic: str) -> List[Tuple[float, str]]:
-    """When each LED pattern was shown, in time order, and its name.
+def led_messages(bag: Bag, topic: str) -> List[Tuple[float, Any]]:
+    """The LED emitter's ``LEDPattern`` messages on ``topic``, with when each was shown.
 
     The emitter stamps each pattern when it shows it. A recorder in another process may
     connect to the latched topic late and receive the pattern later (its record time), so
     the stamps are used unless every one is 0 (an emitter that does not stamp).
+
+    Returns:
+        (time in seconds, message) pairs, in time order.
     """
     records = [
-        (item.time, item.message.header.stamp.to_nsec() / NS_PER_S, _pattern_name(item.message))
+        (item.time, item.message.header.stamp.to_nsec() / NS_PER_S, item.message)
         for item in bag.read(topic)
     ]
     stamped = any(stamp for _, stamp, _ in records)
-    changes = [(stamp if stamped else t, name) for t, stamp, name in records]
-    return sorted(changes, key=lambda change: change[0])
+    shown = [(stamp if stamped else t, message) for t, stamp, message in records]
+    return sorted(shown, key=lambda pair: pair[0])
+
+
+def _led_changes(bag: Bag, topic: str) -> List[Tuple[float, str]]:
+    """When each LED pattern was shown, in time order, and its name."""
+    return [(t, _pattern_name(message)) for t, message in led_messages(bag, topic)]
 
 
 def _track(tracks: Sequence[PoseTrack], suffix: str) -> Optional[PoseTrack]:

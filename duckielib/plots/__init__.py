@@ -6,6 +6,9 @@ outside it draws, and the modules it draws (the simulator, the bags) never impor
 - :mod:`~duckielib.plots.paths`: pose tracks (odometry against the ground truth) as paths on
   the mat and over time, and their animation;
 - :mod:`~duckielib.plots.world`: the simulator's mat, the robot with its LEDs, and its runs;
+- :mod:`~duckielib.plots.player`: a run played back: robot, LEDs, paths, state and camera,
+  with play, pause and a time slider in a notebook, or as a GIF or MP4;
+- :mod:`~duckielib.plots.camera`: an image topic on screen, live or from a bag;
 - :mod:`~duckielib.plots.diagrams`: the notebooks' diagrams of topics, nodes and missions;
 - :mod:`~duckielib.plots.files`: every figure and animation written to a file, whole or not
   at all;
@@ -16,13 +19,16 @@ Every name in a module's ``__all__`` is imported here, so ``from duckielib.plots
 is all a notebook or a command needs; other names are the package's own.
 """
 
+from duckielib.plots.camera import ImageView
 from duckielib.plots.canvas import draw_tile_grid
 from duckielib.plots.diagrams import plot_mission_nodes, plot_mission_states, plot_topic_ends
 from duckielib.plots.files import save_animation, save_figure
 from duckielib.plots.paths import animate_path, plot_path, plot_pose_over_time, pose_figure
+from duckielib.plots.player import Recording, RunPlayer
 from duckielib.plots.world import animate_run, animation_html, draw_mat, draw_robot, plot_run
 
 __all__ = [
+    "ImageView",
     "animate_path",
     "animate_run",
     "animation_html",
@@ -36,6 +42,8 @@ __all__ = [
     "plot_run",
     "plot_topic_ends",
     "pose_figure",
+    "Recording",
+    "RunPlayer",
     "save_animation",
     "save_figure",
 ]

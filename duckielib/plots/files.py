@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 __all__ = ["save_animation", "save_figure"]
 
 _FIGURE_FORMATS = (".png", ".svg", ".pdf")
-_ANIMATION_FORMATS = (".gif", ".mp4")
+ANIMATION_FORMATS = (".gif", ".mp4")
 
 
 def _partial_path(path: Path) -> Path:
@@ -69,7 +69,7 @@ def _write_whole(path: Path, what: str, write: Callable[[Path], None]) -> Path:
     return path
 
 
-def _checked_path(path: Union[str, Path], what: str, formats: Tuple[str, ...]) -> Path:
+def checked_path(path: Union[str, Path], what: str, formats: Tuple[str, ...]) -> Path:
     """``path`` as a Path, once its suffix is one of ``formats`` and its folder exists."""
     path = Path(path)
     if path.suffix.lower() not in formats:
@@ -99,7 +99,7 @@ def save_figure(fig: Figure, path: Union[str, Path]) -> Path:
         DuckielibError: if the suffix is none of those, the folder does not exist, or the file
             cannot be written.
     """
-    path = _checked_path(path, "figure", _FIGURE_FORMATS)
+    path = checked_path(path, "figure", _FIGURE_FORMATS)
     suffix = path.suffix.lower()
     return _write_whole(
         path,
@@ -131,7 +131,7 @@ def save_animation(
     """
     from matplotlib import animation
 
-    path = _checked_path(path, "animation", _ANIMATION_FORMATS)
+    path = checked_path(path, "animation", ANIMATION_FORMATS)
     writer: animation.AbstractMovieWriter
     if path.suffix.lower() == ".gif":
         writer = animation.PillowWriter(fps=round(fps))

@@ -115,19 +115,41 @@ def _to_world(points: np.ndarray, pose: Sequence[float]) -> np.ndarray:
     return points @ rotation.T + np.array([x, y])
 
 
-class _RobotArtist:
-    """The patches of one drawn robot, movable from pose to pose."""
+class RobotArtist:
+    """The patches of one drawn robot, movable from pose to pose.
 
-    def __init__(self, ax: Axes, config: RobotConfig) -> None:
+    Args:
+        ax: the axes to draw on.
+        config: the robot's size.
+        ghost: draw only a dashed outline in ``color``, without LEDs (where odometry believes
+            the robot is).
+        color: the ghost's colour.
+    """
+
+    def __init__(
+        self, ax: Axes, config: RobotConfig, ghost: bool = False, color: str = _ESTIMATE_COLOR
+    ) -> None:
         self.config = config
         self.chassis_local = _chassis_outline(config)
         self.wheels_local = [_wheel_outline(config, 1.0), _wheel_outline(config, -1.0)]
-        self.leds_local = _led_positions(config)
+        self.leds_local = _led_positions(config) if not ghost else np.zeros((0, 2))
         self.chassis = patches.Polygon(
-            self.chassis_local, closed=True, facecolor="#f2c200", edgecolor="black", zorder=4
+            self.chassis_local,
+            closed=True,
+            facecolor="none" if ghost else "#f2c200",
+            edgecolor=color if ghost else "black",
+            linestyle="--" if ghost else "-",
+            linewidth=2 if ghost else 1,
+            zorder=3.5 if ghost else 4,
         )
         self.wheels = [
-            patches.Polygon(w, closed=True, facecolor="#222222", edgecolor="none", zorder=5)
+            patches.Polygon(
+                w,
+                closed=True,
+                facecolor="none" if ghost else "#222222",
+                edgecolor=color if ghost else "none",
+                zorder=3.5 if ghost else 5,
+            )
             for w in self.wheels_local
         ]
         self.leds = [
@@ -137,7 +159,15 @@ class _RobotArtist:
         for artist in (self.chassis, *self.wheels, *self.leds):
             ax.add_patch(artist)
 
-    def update(self, pose: Sequence[float], led_colors: Optional[Sequence[RGB]]) -> List[Artist]:
+    def update(
+        self, pose: Optional[Sequence[float]], led_colors: Optional[Sequence[RGB]]
+    ) -> List[Artist]:
+        """Move the robot to ``pose`` (hidden when None) with its LEDs in ``led_colors``."""
+        artists: List[Artist] = [self.chassis, *self.wheels, *self.leds]
+        for artist in artists:
+            artist.set_visible(pose is not None)
+        if pose is None:
+            return artists
         self.chassis.set_xy(_to_world(self.chassis_local, pose))
         for wheel, local in zip(self.wheels, self.wheels_local):
             wheel.set_xy(_to_world(local, pose))
@@ -146,7 +176,7 @@ class _RobotArtist:
         for led, centre, (red, green, blue) in zip(self.leds, centres, colors):
             led.set_center((float(centre[0]), float(centre[1])))
             led.set_facecolor((float(red), float(green), float(blue)))
-        return [self.chassis, *self.wheels, *self.leds]
+        return artists
 
 
 def draw_robot(
@@ -166,7 +196,7 @@ def draw_robot(
     Returns:
         The matplotlib patches drawn.
     """
-    return _RobotArtist(ax, config).update(pose, led_colors)
+    return RobotArtist(ax, config).update(pose, led_colors)
 
 
 def _estimate_xy(estimate: Optional[object]) -> Optional[np.ndarray]:
@@ -262,7 +292,7 @@ def animate_run(
         (estimate_line,) = ax.plot(
             [], [], color=_ESTIMATE_COLOR, linewidth=2, linestyle="--", label="estimate", zorder=3
         )
-    robot = _RobotArtist(ax, sim.config)
+    robot = RobotArtist(ax, sim.config)
     title = ax.set_title("")
     ax.legend(loc="upper right")
 

@@ -348,7 +348,7 @@ def _write_run(
     tracks = _named_tracks(tracks)
     files["trajectory"] = _trajectory_figure(tracks, report, folder / "trajectory.png")
     if animation:
-        files["animation"] = _animation(tracks, folder / "mission.gif")
+        files["animation"] = _animation(files["bag"], chosen, label, noise, folder / "mission.gif")
     files["summary"] = folder / "summary.json"
     partial = folder / "summary.json.partial"
     partial.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
@@ -509,11 +509,13 @@ def _trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> 
     return plots.save_figure(figure, path)
 
 
-def _animation(tracks: List[Any], path: Path) -> Path:
-    from duckielib import plots
+def _animation(bag: Path, chosen: Mission, label: str, noise: str, path: Path) -> Path:
+    """The run as an animation: the robot with its LEDs and state, in about 12 s, 100 frames."""
+    from duckielib.plots import Recording, RunPlayer
+    from duckielib.sim.world import World
 
-    duration = max(float(track.t[-1]) for track in tracks)
-    fps = 8.0
-    speed = max(1.0, duration / 10.0)  # about 10 s of animation, 80 frames
-    animation = plots.animate_path(tracks, fps=fps, speed=speed)
-    return plots.save_animation(animation, path, fps=fps, dpi=60)
+    title = f"{chosen.name}: {label.replace('the ', '')} solution, {noise} robot"
+    recording = Recording.from_bag(bag, world=World(), title=title)
+    first, last = recording.span
+    player = RunPlayer(recording, fps=8.0, speed=max(1.0, (last - first) / 12.0), max_frames=100)
+    return player.save(path)
