@@ -257,3 +257,63 @@ def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(tmp_path, 
     )
     assert result.to_grade == [("10_bag_analysis", "answer_bag_final")]
     assert result.cells[("10_bag_analysis", "answer_theta_wrap")] == (0.0, 2.0)  # unanswered
+
+
+#: The run player's caption: "t = 12.3 s · state: square · LEDs: GREEN".
+CAPTION = ".duckie-player .widget-html-content"
+
+
+def test_a_student_plays_a_run_in_the_player_and_sees_the_robot_its_lights_and_its_state(
+    tmp_path, browser
+):
+    import io
+
+    import numpy as np
+    from PIL import Image
+
+    from duckielib.leds import pattern_colors, pattern_named
+
+    root = tmp_path / "student"
+    kernel = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    notebook = nbformat.v4.new_notebook(metadata={"kernelspec": kernel})
+    notebook.cells = [
+        nbformat.v4.new_code_cell(
+            "from duckielib.bags import sample_bag\n"
+            "from duckielib.plots import RunPlayer\n\n"
+            "RunPlayer(sample_bag('square_then_circle_realistic'))"
+        )
+    ]
+    (root / "course" / "watch").mkdir(parents=True)
+    nbformat.write(notebook, root / "course" / "watch" / "watch.ipynb")
+    with lab(tmp_path, root) as port:
+        page = browser.new_page(viewport={"width": 1400, "height": 1200})
+        run_all_in_the_browser(page, port, "watch")
+        player = page.locator(f"{SHOWN} .duckie-player")
+        player.wait_for(timeout=60_000)
+        caption = page.locator(CAPTION)
+        assert caption.inner_text().startswith("t = 0.0 s")
+        play_pause = player.locator(".widget-play button").first  # ▶, then ⏸ while playing
+        play_pause.click()
+        # The square's first leg: green LEDs. Playing moves the slider; the kernel draws.
+        page.wait_for_function(
+            "(selector) => document.querySelector(selector).textContent.includes('square')",
+            arg=CAPTION,
+            timeout=60_000,
+        )
+        play_pause.click()
+        page.wait_for_timeout(1500)  # the last frames asked for arrive
+        paused = caption.inner_text()
+        page.wait_for_timeout(1500)
+        assert caption.inner_text() == paused, "the player went on after pause"
+        shot = player.screenshot(path=str(tmp_path / "player.png"))
+    t, state, lights = re.fullmatch(r"t = ([\d.]+) s · state: (\S+) · LEDs: (\S+)", paused).groups()
+    assert float(t) > 0
+    assert state == "square"
+    assert lights == "GREEN"
+    pixels = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int)
+    green = np.round(np.asarray(pattern_colors(pattern_named(lights))[0]) * 255)
+    chassis = np.array([0xF2, 0xC2, 0x00])
+    for color, least in ((green, 2000), (chassis, 500)):
+        assert np.all(np.abs(pixels - color) <= 24, axis=2).sum() >= least, (
+            f"the screenshot ({tmp_path / 'player.png'}) lacks the colour {color}"
+        )
