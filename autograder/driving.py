@@ -80,6 +80,11 @@ MAX_SCORE = sum(POINTS.values())
 ROBOT = "duckiebot"
 #: The trajectory figure may be at most this big (bytes); a larger file is left out.
 FIGURE_LIMIT = 2_000_000
+#: Frames of the feedback page's animation of a run (8 a second).
+ANIMATION_FRAMES = 64
+#: The missions whose run the feedback page plays back (about 2 s of the grader's time each;
+#: the others show their trajectory figure only).
+ANIMATED = ("square_then_circle",)
 #: The run's bag (or its unfinished recording) may be at most this big (bytes); a larger one
 #: is not read. The reference's bag is under 10 MB.
 BAG_LIMIT = 200 * 1024**2
@@ -97,6 +102,8 @@ class Driving:
         reasons: why points were lost, one sentence each.
         summary: what the robot did (the mission report as plain data), or None.
         figure: the trajectory figure's PNG bytes, or None.
+        animation: the run played back (robot, LEDs, states), GIF bytes drawn by the grader
+            from its own copy of the bag (the missions of :data:`ANIMATED`), or None.
         out_of: the most points of each part of ``parts``.
         finished: whether the mission ran to its end.
         timed_out: whether the grader stopped the run at its wall-clock limit.
@@ -107,6 +114,7 @@ class Driving:
     reasons: List[str] = field(default_factory=list)
     summary: Optional[Dict[str, Any]] = None
     figure: Optional[bytes] = None
+    animation: Optional[bytes] = None
     out_of: Dict[str, float] = field(default_factory=dict)
     finished: bool = False
     timed_out: bool = False
@@ -338,6 +346,23 @@ def _figure(run: Path) -> Optional[bytes]:
     return data if data.startswith(_PNG) else None
 
 
+def _played_back(bag: Path, mission: str) -> Optional[bytes]:
+    """The grader's copy of the bag as a GIF for the feedback page, or None if it cannot be.
+
+    Drawn here, from the bag that was scored, rather than taken from the run's folder: the
+    page shows what the grader judged.
+    """
+    from duckielib.errors import DuckielibError
+    from duckielib.tools.runner import write_animation
+
+    path = bag.with_name("played_back.gif")
+    try:
+        write_animation(bag, f"{mission}: your run, as the grader read it", path, ANIMATION_FRAMES)
+        return path.read_bytes()
+    except (DuckielibError, ValueError, KeyError, IndexError, OSError):
+        return None
+
+
 def _failure(stderr: str) -> str:
     """The sentence ``duckie mission`` ended with, or the last line it printed, without paths."""
     lines = [line for line in stderr.splitlines() if line.strip()]
@@ -418,4 +443,6 @@ def _score_copy(path: Path, mission: str) -> Driving:
     earned.update(zip(moving, (motion.fraction for motion in motions)))
     driving.parts = {name: round(out_of[name] * earned[name], 2) for name in out_of}
     driving.score = round(sum(driving.parts.values()), 2)
+    if mission in ANIMATED:
+        driving.animation = _played_back(path, mission)
     return driving

@@ -214,6 +214,10 @@ def _driving_section(mission: str, driving: Driving) -> List[str]:
     if driving.figure is not None:
         data = base64.b64encode(driving.figure).decode("ascii")
         parts.append(f'<img alt="The robot\'s path" src="data:image/png;base64,{data}">')
+    if driving.animation is not None:
+        data = base64.b64encode(driving.animation).decode("ascii")
+        parts.append("<p>The run played back: the robot, its LEDs and the state it announced.</p>")
+        parts.append(f'<img alt="The run played back" src="data:image/gif;base64,{data}">')
     return parts
 
 

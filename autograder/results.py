@@ -77,6 +77,10 @@ def _key(pair: Tuple[str, str]) -> str:
     return f"{pair[0]}:{pair[1]}"
 
 
+#: The pictures of a driving run, bytes kept as base64 text.
+_PICTURES = ("figure", "animation")
+
+
 def _pair(key: str) -> Tuple[str, str]:
     assignment, _, grade_id = key.partition(":")
     return assignment, grade_id
@@ -87,8 +91,9 @@ def to_data(result: StudentResult) -> Dict[str, Any]:
     missions = {}
     for name, driving in result.missions.items():
         data = dataclasses.asdict(driving)
-        figure = data.get("figure")
-        data["figure"] = None if figure is None else base64.b64encode(figure).decode("ascii")
+        for picture in _PICTURES:
+            value = data.get(picture)
+            data[picture] = None if value is None else base64.b64encode(value).decode("ascii")
         missions[name] = data
     return {
         "student": result.student,
@@ -110,8 +115,9 @@ def from_data(data: Dict[str, Any]) -> StudentResult:
     missions = {}
     for name, driving in (data.get("missions") or {}).items():
         kept = {key: value for key, value in driving.items() if key in known}
-        if kept.get("figure") is not None:
-            kept["figure"] = base64.b64decode(kept["figure"])
+        for picture in _PICTURES:
+            if kept.get(picture) is not None:
+                kept[picture] = base64.b64decode(kept[picture])
         missions[str(name)] = Driving(**kept)
     return StudentResult(
         student=str(data["student"]),

@@ -6,6 +6,7 @@ a robot that only pretends to drive, missions that never end, a square turned th
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import struct
@@ -135,6 +136,13 @@ def test_the_reference_drives_the_mission_for_full_marks(sandbox, tmp_path):
     ]  # fmt: skip
     assert driving.summary["distance_to_start"] < 0.05
     assert driving.figure.startswith(b"\x89PNG")
+    # The feedback page's animation, drawn by the grader from its copy of the bag.
+    from PIL import Image
+
+    with Image.open(io.BytesIO(driving.animation)) as gif:
+        assert gif.format == "GIF"
+        assert gif.size[0] >= 800
+        assert gif.n_frames == 64
 
 
 def test_the_realistic_robot_is_judged_by_where_it_really_went(tmp_path):

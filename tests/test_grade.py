@@ -312,6 +312,9 @@ def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_probl
     assert {name: driving.score for name, driving in result.missions.items()} == dict.fromkeys(
         MISSIONS, 100
     ), {name: driving.reasons for name, driving in result.missions.items()}
+    # The main mission is played back on the page; the others show their figure only.
+    assert page.count('src="data:image/gif;base64,') == 1
+    assert page.count('src="data:image/png;base64,') == len(MISSIONS)
 
 
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):

@@ -81,8 +81,9 @@ def test_a_figure_shown_as_text_instead_of_a_picture_is_noted(tmp_path):
         [
             nbformat.v4.new_code_cell("from matplotlib.figure import Figure\nFigure()"),
             nbformat.v4.new_code_cell(
-                "from duckielib.plots import plot_topic_ends\n"
-                "plot_topic_ends({'/chatter': (['/a'], ['/b'])}).figure"
+                "from duckielib.plots import plot_mission_states\n"
+                "from duckielib.missions import SQUARE_THEN_CIRCLE\n"
+                "plot_mission_states(SQUARE_THEN_CIRCLE).figure"
             ),
         ],
     )

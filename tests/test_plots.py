@@ -508,26 +508,3 @@ def test_mission_states_are_boxes_in_their_led_colours_in_order():
     assert "square\n(GREEN)\n\nrotate -90°\nstraight 1.25 m\nrotate +90°" in texts[2]
     assert texts.count("after 5 s") == 3
     assert texts[-1] == "done"
-
-
-def test_the_mission_nodes_and_the_topics_between_them():
-    from duckielib.plots import plot_mission_nodes
-
-    texts = labels(plot_mission_nodes())
-    assert "mission_node\n[yours: notebook 09]" in texts
-    for name in ("odometry_node/pose", "car_cmd_switch_node/cmd", "~state", "shutdown"):
-        assert name in texts
-
-
-def test_topic_ends_name_nobody_where_no_node_is():
-    from duckielib.plots import plot_topic_ends
-
-    ax = plot_topic_ends({"/bot/chatter": (["/bot/talker"], []), "/bot/cmd": ([], ["/a", "/b"])})
-    assert labels(ax) == [
-        "/bot/chatter",
-        "/bot/talker",
-        "(nobody)",
-        "/bot/cmd",
-        "(nobody)",
-        "/a\n/b",
-    ]

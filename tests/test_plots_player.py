@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from duckielib import rostime
 from duckielib.bags import Bag, BagRecorder, BagWriter, sample_bag
 from duckielib.errors import DuckielibError
 from duckielib.leds import pattern_colors, pattern_named
-from duckielib.messages import String
+from duckielib.messages import Pose2DStamped, String
 from duckielib.missions import SQUARE_THEN_CIRCLE
 from duckielib.plots import ImageView, Recording, RunPlayer
 from duckielib.sim import VirtualDuckiebot
@@ -182,3 +185,36 @@ def test_the_image_view_plays_a_bags_frames(tmp_path):
     assert f"frame 4 of {len(frames)}" in caption.value
     with pytest.raises(DuckielibError, match="no image topic"):
         ImageView.from_bag(sample_bag())
+
+
+def test_a_real_robots_odometry_bag_plays_with_the_robot_where_odometry_puts_it(tmp_path):
+    # A real Duckiebot has no ground truth: its bag holds the robot's own pose estimate, which
+    # starts at (0, 0) and may go negative.
+    path = tmp_path / "real.bag"
+    with BagWriter(path) as writer:
+        for k in range(60):
+            t = k / 10
+            pose = Pose2DStamped(x=-0.3 * t, y=0.1 * t, theta=math.pi)
+            pose.header.stamp = rostime.Time.from_sec(1_700_000_000 + t)
+            writer.write("/db21/velocity_to_pose_node/pose", pose, int((1_700_000_000 + t) * 1e9))
+    player = RunPlayer(path)
+    recording = player.recording
+    assert len(recording.truth) == 0
+    assert len(recording.odometry) == 60
+    assert recording.world is None  # tiles under the path, no walls
+    assert recording.span == pytest.approx((0.0, 5.9))
+    frame = player.frame(len(player) - 1)
+    assert pixels_near(frame, CHASSIS, tolerance=8) > 500  # the robot, drawn at odometry's pose
+    assert "state: (none announced) · LEDs: off" in player.caption(0)
+
+
+def test_the_image_views_own_node_is_left_out_of_the_graph_drawing():
+    from duckielib.ros import ros_graph
+
+    bot = VirtualDuckiebot(seed=0)
+    before = ros_graph(bot.graph)
+    with ImageView(bot.namespace + "camera_node/image/compressed", graph=bot.graph):
+        bot.run(0.1)
+        during = ros_graph(bot.graph)
+    assert during.nodes == before.nodes
+    assert [name for name in during.hidden if name.startswith("/rqt_image_view_")]

@@ -9,7 +9,8 @@ outside it draws, and the modules it draws (the simulator, the bags) never impor
 - :mod:`~duckielib.plots.player`: a run played back: robot, LEDs, paths, state and camera,
   with play, pause and a time slider in a notebook, or as a GIF or MP4;
 - :mod:`~duckielib.plots.camera`: an image topic on screen, live or from a bag;
-- :mod:`~duckielib.plots.diagrams`: the notebooks' diagrams of topics, nodes and missions;
+- :mod:`~duckielib.plots.diagrams`: the notebooks' diagrams of missions;
+- :mod:`~duckielib.plots.rosgraph`: the ROS graph drawn from the graph itself (``rqt_graph``);
 - :mod:`~duckielib.plots.files`: every figure and animation written to a file, whole or not
   at all;
 - :mod:`~duckielib.plots.canvas`: what they share: a figure that shows itself in a notebook,
@@ -21,10 +22,11 @@ is all a notebook or a command needs; other names are the package's own.
 
 from duckielib.plots.camera import ImageView
 from duckielib.plots.canvas import draw_tile_grid
-from duckielib.plots.diagrams import plot_mission_nodes, plot_mission_states, plot_topic_ends
-from duckielib.plots.files import save_animation, save_figure
+from duckielib.plots.diagrams import plot_mission_states
+from duckielib.plots.files import save_animation, save_figure, save_gif_frames
 from duckielib.plots.paths import animate_path, plot_path, plot_pose_over_time, pose_figure
 from duckielib.plots.player import Recording, RunPlayer
+from duckielib.plots.rosgraph import plot_ros_graph
 from duckielib.plots.world import animate_run, animation_html, draw_mat, draw_robot, plot_run
 
 __all__ = [
@@ -35,15 +37,15 @@ __all__ = [
     "draw_mat",
     "draw_robot",
     "draw_tile_grid",
-    "plot_mission_nodes",
     "plot_mission_states",
     "plot_path",
     "plot_pose_over_time",
     "plot_run",
-    "plot_topic_ends",
+    "plot_ros_graph",
     "pose_figure",
     "Recording",
     "RunPlayer",
     "save_animation",
     "save_figure",
+    "save_gif_frames",
 ]

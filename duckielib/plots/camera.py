@@ -64,8 +64,7 @@ class ImageView:
 
         from duckielib.ros.context import node_context
         from duckielib.ros.graph import current_graph
-        from duckielib.ros.introspect import _tool_node as tool_node
-        from duckielib.ros.introspect import _topic as topic_record
+        from duckielib.ros.introspect import tool_node, topic_record
         from duckielib.ros.rospy import Subscriber
 
         self.graph = graph if graph is not None else current_graph()

@@ -524,10 +524,24 @@ class RunPlayer:
             DuckielibError: if the suffix is neither .gif nor .mp4, the folder does not exist,
                 an MP4 is asked for without ffmpeg, or the file cannot be written.
         """
-        from duckielib.plots.files import ANIMATION_FORMATS, checked_path, save_animation
+        from duckielib.plots.files import (
+            ANIMATION_FORMATS,
+            checked_path,
+            save_animation,
+            save_gif_frames,
+        )
 
         path = checked_path(path, "animation", ANIMATION_FORMATS)  # before any frame is drawn
-        return save_animation(self.animation(), path, fps=self.fps, dpi=_DPI)
+        if path.suffix.lower() == ".mp4":
+            return save_animation(self.animation(), path, fps=self.fps, dpi=_DPI)
+        # The LEDs' colours exact in every frame, whatever the palette makes of the rest.
+        shown = {
+            color
+            for _, pattern in self.recording.patterns
+            for color in led_tables.pattern_colors(pattern)
+        }
+        frames = [self.frame(index) for index in range(len(self.times))]
+        return save_gif_frames(frames, path, self.fps, sorted(shown))
 
     def __repr__(self) -> str:
         first, last = self.recording.span

@@ -20,7 +20,8 @@ schedules nodes deterministically. The layers, each importing only those below i
   only through the few things it asks of it);
 - :mod:`~duckielib.ros.graph`: the master, its clock and scheduler;
 - :mod:`~duckielib.ros.rospy` and :mod:`~duckielib.ros.introspect`: rospy's API and the
-  ``rostopic``-like tools on top.
+  ``rostopic``-like tools on top; :mod:`~duckielib.ros.rosgraph`: what ``rqt_graph`` shows,
+  now or over the whole run.
 """
 
 from __future__ import annotations
@@ -30,9 +31,11 @@ from duckielib.ros.graph import Graph, NodeCrashed, default_graph
 from duckielib.ros.introspect import rosmsg, rosnode, rosparam, rosservice, rossrv, rostopic
 from duckielib.ros.log import LogRecord
 from duckielib.ros.modules import install_modules, node_script, uninstall_modules
+from duckielib.ros.rosgraph import GraphSnapshot, ros_graph
 
 __all__ = [
     "Graph",
+    "GraphSnapshot",
     "LogRecord",
     "NodeCrashed",
     "default_graph",
@@ -40,6 +43,7 @@ __all__ = [
     "node_script",
     "rosmsg",
     "rosnode",
+    "ros_graph",
     "rosparam",
     "rospy",
     "rosservice",

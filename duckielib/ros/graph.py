@@ -37,7 +37,7 @@ from duckielib.errors import DuckielibError
 from duckielib.ros import context, names
 from duckielib.ros.exceptions import ROSException, ROSInterruptException
 from duckielib.ros.log import ERROR, INFO, LEVEL_NAMES, LogRecord, format_error
-from duckielib.ros.node import Node, ServiceRecord, TopicRecord
+from duckielib.ros.node import ConnectionHistory, Node, ServiceRecord, TopicRecord
 from duckielib.ros.params import ParameterServer
 from duckielib.rostime import NS_PER_S
 
@@ -355,6 +355,8 @@ class Graph(ParameterServer):
         self.nodes: Dict[str, Node] = {}
         self.topics: Dict[str, TopicRecord] = {}
         self.services: Dict[str, ServiceRecord] = {}
+        #: Every connection ever made, also by nodes that have shut down since.
+        self.history = ConnectionHistory()
         ParameterServer.__init__(self)
         self.log: List[LogRecord] = []
         self.stdout = stdout
@@ -709,6 +711,7 @@ class Graph(ParameterServer):
         if old is not None and not old.is_shutdown:
             old.shutdown("a new node registered with the same name")
         self.nodes[node.name] = node
+        self.history.add_node(node)
         actor = self.current_actor()
         if actor is not None:
             actor.node = node
@@ -732,6 +735,7 @@ class Graph(ParameterServer):
         if old is not None and not old.is_shutdown:
             old.shutdown("a new node registered with the same name")
         self.nodes[node.name] = node
+        self.history.add_node(node)
         return node
 
     def remove_node(self, node: Node) -> None:

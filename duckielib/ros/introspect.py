@@ -60,14 +60,23 @@ def _bullets(items: List[str]) -> str:
     return "\n".join(f" * {item}" for item in items) if items else " None"
 
 
-def _tool_node(graph: Graph, tool: str) -> Node:
-    """An anonymous node for a command-line tool, as ``rostopic`` creates one."""
+def tool_node(graph: Graph, tool: str) -> Node:
+    """An anonymous node for a tool (``rostopic``, a notebook's image view), as ROS's tools make.
+
+    The graph drawing hides the course's tools' nodes (see :data:`duckielib.ros.rosgraph.HIDDEN`).
+    """
     node = Node(graph, tool + graph.anonymous_suffix(), "/")
     graph.nodes[node.name] = node
+    graph.history.add_node(node)
     return node
 
 
-def _topic(graph: Graph, name: str) -> Any:
+def topic_record(graph: Graph, name: str) -> Any:
+    """What the master knows of topic ``name``.
+
+    Raises:
+        ROSException: if no node publishes or subscribes to it (naming those there are).
+    """
     record = graph.topics.get(names.canonical(name))
     if record is None:
         known = ", ".join(sorted(graph.topics)) or "none yet"
@@ -87,8 +96,8 @@ def _listen(
     """
     from duckielib.ros.rospy import Subscriber
 
-    record = _topic(graph, topic)
-    node = _tool_node(graph, "rostopic")
+    record = topic_record(graph, topic)
+    node = tool_node(graph, "rostopic")
     with node_context(node):
         Subscriber(record.name, record.data_class, callback)
     try:
@@ -136,12 +145,12 @@ class rostopic:  # noqa: N801 - named after the command
     @staticmethod
     def type(topic: str, graph: Optional[Graph] = None) -> Printout:
         """The message type of a topic (``rostopic type``)."""
-        return Printout(_topic(_graph(graph), topic).type)
+        return Printout(topic_record(_graph(graph), topic).type)
 
     @staticmethod
     def info(topic: str, graph: Optional[Graph] = None) -> Printout:
         """Type, publishers and subscribers of a topic (``rostopic info``)."""
-        record = _topic(_graph(graph), topic)
+        record = topic_record(_graph(graph), topic)
         publishers = sorted({item.node.name for item in record.publishers})
         subscribers = sorted({item.node.name for item in record.subscribers})
         return Printout(
@@ -252,7 +261,7 @@ class rosservice:  # noqa: N801
 
         graph = _graph(graph)
         record = rosservice._record(graph, service)
-        node = _tool_node(graph, "rosservice")
+        node = tool_node(graph, "rosservice")
         try:
             with node_context(node):
                 request = record.service_class._request_class

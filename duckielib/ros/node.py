@@ -7,7 +7,7 @@ act on it. A node knows its graph only as a ``Host``: the few things it asks of 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Tuple, Type
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Set, Tuple, Type
 
 from duckielib.ros import names
 from duckielib.ros.context import node_context
@@ -24,6 +24,7 @@ if TYPE_CHECKING:
 
         topics: Dict[str, TopicRecord]
         services: Dict[str, ServiceRecord]
+        history: ConnectionHistory
 
         @property
         def time(self) -> float: ...
@@ -48,7 +49,7 @@ if TYPE_CHECKING:
         def remove_node(self, node: Node) -> None: ...
 
 
-__all__ = ["Node", "ServiceRecord", "TopicRecord"]
+__all__ = ["ConnectionHistory", "Node", "ServiceRecord", "TopicRecord"]
 
 
 class TopicRecord:
@@ -141,6 +142,57 @@ class ServiceRecord:
     def type(self) -> str:
         """The service's type, ``package/Type``."""
         return self.service_class._type
+
+
+class ConnectionHistory:
+    """Every connection the graph's nodes ever made, kept after the nodes shut down.
+
+    The master's records (:class:`TopicRecord`, :class:`ServiceRecord`) say who is connected
+    now; this says who ever was, so that a drawing of the graph can show what a node did
+    before it finished. Each entry is added once, when a node registers a publisher, a
+    subscriber or a service, or first calls a service: never per message.
+
+    Attributes:
+        nodes: every node registered, by name (the latest one of a name reused).
+        topic_types: each topic's message type, ``package/Type``.
+        service_types: each service's type.
+        publishes: (node name, topic name) for every publisher ever registered.
+        subscribes: (node name, topic name) for every subscriber.
+        serves: (node name, service name) for every service offered.
+        calls: (node name, service name) for every node that called a service.
+    """
+
+    def __init__(self) -> None:
+        self.nodes: Dict[str, Node] = {}
+        self.topic_types: Dict[str, str] = {}
+        self.service_types: Dict[str, str] = {}
+        self.publishes: Set[Tuple[str, str]] = set()
+        self.subscribes: Set[Tuple[str, str]] = set()
+        self.serves: Set[Tuple[str, str]] = set()
+        self.calls: Set[Tuple[str, str]] = set()
+
+    def add_node(self, node: Node) -> None:
+        """Note a node that registered (it replaces an earlier node of the same name)."""
+        self.nodes[node.name] = node
+
+    def add_topic_user(self, node: Node, record: TopicRecord, publishes: bool) -> None:
+        """Note that ``node`` publishes (or subscribes to) the topic of ``record``."""
+        self.nodes.setdefault(node.name, node)
+        if record.type != "*" or record.name not in self.topic_types:  # "*": AnyMsg's
+            self.topic_types[record.name] = record.type
+        (self.publishes if publishes else self.subscribes).add((node.name, record.name))
+
+    def add_server(self, node: Node, record: ServiceRecord) -> None:
+        """Note that ``node`` offers the service of ``record``."""
+        self.nodes.setdefault(node.name, node)
+        self.service_types[record.name] = record.type
+        self.serves.add((node.name, record.name))
+
+    def add_client(self, node: Node, record: ServiceRecord) -> None:
+        """Note that ``node`` called the service of ``record``."""
+        self.nodes.setdefault(node.name, node)
+        self.service_types[record.name] = record.type
+        self.calls.add((node.name, record.name))
 
 
 class Node:

@@ -510,12 +510,29 @@ def _trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> 
 
 
 def _animation(bag: Path, chosen: Mission, label: str, noise: str, path: Path) -> Path:
-    """The run as an animation: the robot with its LEDs and state, in about 12 s, 100 frames."""
+    """``mission.gif``: the run played back in about 12 s."""
+    title = f"{chosen.name}: {label.replace('the ', '')} solution, {noise} robot"
+    return write_animation(bag, title, path)
+
+
+def write_animation(bag: Path, title: str, path: Path, frames: int = 100) -> Path:
+    """Write a mission's bag as an animation: the robot with its LEDs and states, in 12 s.
+
+    Args:
+        bag: the run's bag.
+        title: what the run is, shown above the mat.
+        path: the GIF (or MP4) to write.
+        frames: how many frames (8 a second).
+
+    Raises:
+        BagError: if the bag cannot be read.
+        DuckielibError: if it holds nothing to play, or the file cannot be written.
+    """
     from duckielib.plots import Recording, RunPlayer
     from duckielib.sim.world import World
 
-    title = f"{chosen.name}: {label.replace('the ', '')} solution, {noise} robot"
     recording = Recording.from_bag(bag, world=World(), title=title)
     first, last = recording.span
-    player = RunPlayer(recording, fps=8.0, speed=max(1.0, (last - first) / 12.0), max_frames=100)
+    fps = 8.0
+    player = RunPlayer(recording, fps=fps, speed=max(1.0, (last - first) / 12.0), max_frames=frames)
     return player.save(path)

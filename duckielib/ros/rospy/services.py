@@ -67,6 +67,7 @@ class Service:
         )
         self._node.graph.services[self.name] = self._record
         self._node.services.append(self._record)
+        self._node.graph.history.add_server(self._node, self._record)
 
     def shutdown(self, reason: str = "") -> None:
         """Stop offering the service."""
@@ -124,6 +125,7 @@ class ServiceProxy:
         self.response_class = service_class._response_class
         self.persistent = persistent
         self._closed = False
+        self._called: Optional[ServiceRecord] = None  # the service last called, for the history
 
     def _attach(self, node: Node) -> None:
         self._node = node
@@ -160,6 +162,9 @@ class ServiceProxy:
         except MessageError as error:
             raise ROSSerializationException(str(error)) from None
         record.call_count += 1
+        if self._called is not record:  # the proxy's node is the caller, as in ROS
+            self._called = record
+            self._node.graph.history.add_client(self._node, record)
         with node_context(record.node):
             try:
                 response = _response_from(

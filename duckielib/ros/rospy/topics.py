@@ -188,6 +188,7 @@ class Publisher:
         self._record = node.topic(self.name, self.data_class, "publish on")
         self._record.publishers.append(self)
         node.publishers.append(self)
+        node.graph.history.add_topic_user(node, self._record, publishes=True)
         if self.queue_size is None:
             node.log(
                 WARN,
@@ -298,6 +299,7 @@ class Subscriber:
         self._record = node.topic(self.name, data_class, "subscribe to")
         self._record.subscribers.append(self)
         node.subscribers.append(self)
+        node.graph.history.add_topic_user(node, self._record, publishes=False)
         for data in self._record.latched.values():
             self._enqueue(data)
         for publisher in list(self._record.publishers):
