@@ -179,7 +179,7 @@ def test_ctrl_c_during_the_drive_stops_the_wheels_and_keeps_the_bag(tmp_path):
 def test_ctrl_c_that_compiled_code_turns_into_another_error_still_ends_as_interrupted(tmp_path):
     # matplotlib's drawing code reports a Ctrl-C that lands inside it as a ValueError.
     patch = (
-        "def _animation(tracks, path):\n"
+        "def _animation(*args):\n"
         "    try:\n"
         "        os.kill(os.getpid(), signal.SIGINT)\n"
         "        time.sleep(5)\n"

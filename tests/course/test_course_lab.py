@@ -205,6 +205,14 @@ def test_validate_for_students_reports_any_cell_that_raises_not_only_the_tests(t
     assert "NameError" in failed["error"]
 
 
+#: The widgets each notebook shows: the run player, the camera's image view.
+WIDGETS = {
+    "02_ros_concepts": (".duckie-image-view", ".duckie-player"),
+    "09_mission": (".duckie-player",),
+    "10_bag_analysis": (".duckie-player",),
+}
+
+
 def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(tmp_path, browser):
     # The notebooks with answers in words, as a student who finished the code meets them: Run
     # All shows no error; an answer typed into YOUR ANSWER HERE is saved into its answer cell
@@ -222,6 +230,9 @@ def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(tmp_path, 
                 page.screenshot(path=str(tmp_path / f"{name}.png"), full_page=True)
                 pytest.fail(f"Run All of {name} did not end; see {tmp_path / name}.png")
             assert page.locator(STDERR).all_inner_texts() == [], f"cells of {name} showed errors"
+            for widget in WIDGETS.get(name, ()):  # the players and views drew their pictures
+                shown = page.locator(f"{SHOWN} {widget} img").first
+                assert shown.get_attribute("src"), f"{name} shows no picture in its {widget}"
             if name != "10_bag_analysis":
                 page.close()
         # Still in 10_bag_analysis: double-click the answer cell, type, render, save.
