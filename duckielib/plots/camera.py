@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Dict, List, Optional, Tuple, Union
 
 from duckielib.errors import DuckielibError
-from duckielib.plots.player import playing_widget
+from duckielib.plots.player import image_topic, playing_widget
 from duckielib.rostime import NS_PER_S
 
 if TYPE_CHECKING:
@@ -134,8 +134,8 @@ class ImageView:
 
         Args:
             bag: the bag, or its path.
-            topic: the ``sensor_msgs/CompressedImage`` topic (default: the bag's only one, or
-                the first whose name says it is annotated).
+            topic: the ``sensor_msgs/CompressedImage`` topic (default: the first whose name
+                says it is annotated, else the first there is).
             fps: frames per second when playing.
 
         Returns:
@@ -148,16 +148,9 @@ class ImageView:
         from duckielib.bags import Bag
 
         bag = bag if isinstance(bag, Bag) else Bag(bag)
-        images = bag.topics_of_type(_IMAGE_TYPE)
-        if topic is None:
-            annotated = [name for name in images if "annotated" in name]
-            topic = (annotated or images or [""])[0]
-        if topic not in images:
-            listed = ", ".join(images) or "none"
-            raise DuckielibError(
-                f"The bag has no image topic {topic or '(none given)'}; its CompressedImage "
-                f"topics: {listed}."
-            )
+        topic = image_topic(bag, topic)
+        if not topic:
+            raise DuckielibError("The bag has no image topic: it recorded no CompressedImage.")
         start = bag.start_ns / NS_PER_S
         frames: List[Tuple[float, bytes, str]] = [
             (item.time - start, bytes(item.message.data), _format(item.message))

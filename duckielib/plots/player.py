@@ -221,15 +221,7 @@ class Recording:
             recording.states = [
                 (item.time - start, item.message.data) for item in bag.read(states[0])
             ]
-        images = bag.topics_of_type(_IMAGE_TYPE)
-        if camera_topic is None:
-            annotated = [topic for topic in images if "annotated" in topic]
-            camera_topic = (annotated or images or [""])[0]
-        elif camera_topic not in images:
-            listed = ", ".join(images) or "none"
-            raise DuckielibError(
-                f"The bag has no image topic {camera_topic}; its CompressedImage topics: {listed}."
-            )
+        camera_topic = image_topic(bag, camera_topic)
         if camera_topic:
             recording.camera_topic = camera_topic
             recording.frames = [
@@ -238,6 +230,27 @@ class Recording:
         recording.world = world if world is not None else _bag_world(recording.truth)
         recording.span  # noqa: B018 - says clearly when there is nothing to play
         return recording
+
+
+def image_topic(bag: Bag, wanted: Optional[str] = None) -> str:
+    """The bag's ``sensor_msgs/CompressedImage`` topic to show ("" if it has none).
+
+    That is ``wanted``, or by default the first whose name says it is annotated, else the
+    first there is.
+
+    Raises:
+        DuckielibError: if ``wanted`` is not an image topic of the bag (naming those there are).
+    """
+    images = bag.topics_of_type(_IMAGE_TYPE)
+    if wanted is None:
+        annotated = [topic for topic in images if "annotated" in topic]
+        return (annotated or images or [""])[0]
+    if wanted not in images:
+        listed = ", ".join(images) or "none"
+        raise DuckielibError(
+            f"The bag has no image topic {wanted}; its CompressedImage topics: {listed}."
+        )
+    return wanted
 
 
 def _spread(odometry: object, times: np.ndarray) -> Tuple[np.ndarray, Poses]:
