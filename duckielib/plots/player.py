@@ -305,6 +305,7 @@ class _Frame:
         left = self.figure.add_axes((0.08 / scale, 0.1, 0.9 / scale, 0.8))
         self.mat = left
         self._draw_mat(left)
+        truth = len(recording.truth) > 0
         (self.true_line,) = left.plot(
             [], [], color=_TRUE_COLOR, linewidth=2.5, label="true path", zorder=3
         )
@@ -315,8 +316,12 @@ class _Frame:
             linewidth=2,
             linestyle="--",
             zorder=3,
-            label="odometry (dashed robot: where it believes it is)",
+            label="odometry (dashed robot: where it believes it is)"
+            if truth
+            else "odometry (no ground truth: the robot is drawn where odometry puts it)",
         )
+        if not truth:
+            self.true_line.set_label("_nolegend_")
         self.ghost = RobotArtist(left, recording.config, ghost=True, color=_ODOMETRY_COLOR)
         self.robot = RobotArtist(left, recording.config)
         if len(recording.truth) or len(recording.odometry):

@@ -64,6 +64,16 @@ def _bag_plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bag_animate(args: argparse.Namespace) -> int:
+    from duckielib.plots import Recording, RunPlayer
+
+    recording = Recording.from_bag(args.bag, camera_topic=args.camera)
+    first, last = recording.span
+    player = RunPlayer(recording, fps=8.0, speed=max(1.0, (last - first) / args.seconds))
+    print(f"Wrote {player.save(args.output)} ({len(player)} frames).")
+    return 0
+
+
 def _pose_figure(tracks: List[Any], title: str, path: str) -> Any:
     """Draw pose ``tracks`` to the figure file ``path``, times from the first pose; the path."""
     import dataclasses
@@ -512,6 +522,22 @@ def _parser() -> argparse.ArgumentParser:
     plot.add_argument("--topic", action="append", help="a pose topic to plot (default: all)")
     plot.add_argument("--time-base", **time_base)
     plot.set_defaults(handler=_bag_plot)
+
+    animate = bag_commands.add_parser(
+        "animate",
+        help="play a bag back as a GIF or MP4: the robot, its LEDs, its paths, state and camera",
+    )
+    animate.add_argument(
+        "bag", help="the bag file (poses, and LEDs, states, camera if it has them)"
+    )
+    animate.add_argument("-o", "--output", required=True, help="the animation to write (.gif/.mp4)")
+    animate.add_argument(
+        "--camera", metavar="TOPIC", help="the CompressedImage topic to show (default: the first)"
+    )
+    animate.add_argument(
+        "--seconds", type=float, default=12.0, help="how long the animation lasts (default 12)"
+    )
+    animate.set_defaults(handler=_bag_animate)
 
     odometry = bag_commands.add_parser(
         "odometry", help="replay wheel odometry from a bag's encoder ticks"

@@ -95,6 +95,28 @@ def test_plot_writes_a_figure(tmp_path):
     assert (tmp_path / "poses.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_animate_plays_a_bag_back_as_a_gif_or_says_why_not(tmp_path):
+    from PIL import Image
+
+    result = duckie("animate", sample_bag(), "-o", tmp_path / "run.gif", "--seconds", "4")
+    assert result.returncode == 0, result.stderr
+    assert "(33 frames)" in result.stdout  # 146 s in 4 s at 8 frames a second
+    with Image.open(tmp_path / "run.gif") as gif:
+        assert gif.size[0] >= 800
+        assert gif.n_frames == 33
+    refused = duckie("animate", sample_bag(), "-o", tmp_path / "run.avi")
+    assert refused.returncode == 1
+    assert refused.stderr.startswith("duckie: Cannot save the animation as")
+    assert "Traceback" not in refused.stderr
+    empty = tmp_path / "chatter.bag"
+    with BagWriter(empty) as writer:
+        writer.write("/chatter", String(data="hi"), 1)
+    nothing = duckie("animate", empty, "-o", tmp_path / "chatter.gif")
+    assert nothing.returncode == 1
+    assert "nothing to play" in nothing.stderr
+    assert not (tmp_path / "chatter.gif").exists()
+
+
 def test_repair(tmp_path):
     whole = tmp_path / "whole.bag"
     with BagWriter(whole) as writer:
