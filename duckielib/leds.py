@@ -41,6 +41,7 @@ __all__ = [
     "pattern_named",
     "custom_pattern",
     "pattern_colors",
+    "colors_shown",
     "colors_at",
 ]
 
@@ -314,3 +315,24 @@ def colors_at(pattern: Pattern, seconds: float) -> Tuple[RGB, ...]:
         return colors
     off = (0.0, 0.0, 0.0)
     return tuple(off if flag else color for color, flag in zip(colors, pattern.frequency_mask))
+
+
+def colors_shown(patterns: Sequence[Tuple[float, Pattern]], t: float) -> Tuple[RGB, ...]:
+    """The five colours shown at ``t`` by the last of ``patterns`` set by then.
+
+    Args:
+        patterns: the patterns set, as (time set in seconds, pattern), in time order.
+        t: the time, in seconds.
+
+    Returns:
+        Five RGB triples in [0, 1], by LED index: all off before the first pattern, blinking
+        LEDs off in the second half of each period.
+    """
+    shown: Optional[Tuple[float, Pattern]] = None
+    for since, pattern in patterns:
+        if since > t:
+            break
+        shown = (since, pattern)
+    if shown is None:
+        return ((0.0, 0.0, 0.0),) * LED_COUNT
+    return colors_at(shown[1], t - shown[0])

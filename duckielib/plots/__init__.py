@@ -31,6 +31,8 @@ from duckielib.plots.world import animate_run, animation_html, draw_mat, draw_ro
 
 __all__ = [
     "ImageView",
+    "Recording",
+    "RunPlayer",
     "animate_path",
     "animate_run",
     "animation_html",
@@ -40,11 +42,9 @@ __all__ = [
     "plot_mission_states",
     "plot_path",
     "plot_pose_over_time",
-    "plot_run",
     "plot_ros_graph",
+    "plot_run",
     "pose_figure",
-    "Recording",
-    "RunPlayer",
     "save_animation",
     "save_figure",
     "save_gif_frames",

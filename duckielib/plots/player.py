@@ -55,7 +55,6 @@ _DPI = 100
 _CAMERA_SCALE = 1.75
 _TRUE_COLOR = "#1f9bff"
 _ODOMETRY_COLOR = "#ff9d2e"
-_OFF: Tuple[RGB, ...] = ((0.0, 0.0, 0.0),) * led_tables.LED_COUNT
 _IMAGE_TYPE = "sensor_msgs/CompressedImage"
 _STRING_TYPE = "std_msgs/String"
 _LED_TYPE = "duckietown_msgs/LEDPattern"
@@ -108,14 +107,7 @@ class Recording:
 
     def leds_at(self, t: float) -> Tuple[RGB, ...]:
         """The five LEDs' colours at ``t`` (blinking ones off in the second half of a period)."""
-        shown = None
-        for since, pattern in self.patterns:
-            if since > t:
-                break
-            shown = (since, pattern)
-        if shown is None:
-            return _OFF
-        return led_tables.colors_at(shown[1], t - shown[0])
+        return led_tables.colors_shown(self.patterns, t)
 
     def pattern_at(self, t: float) -> Optional[led_tables.Pattern]:
         """The LED pattern set at ``t``, or None before the first."""
@@ -490,6 +482,19 @@ class RunPlayer:
         self.times = np.linspace(first, last, count) if count > 1 else np.array([last])
         self._frame = _Frame(self.recording)
         self._cache: Dict[int, bytes] = {}
+
+    @classmethod
+    def lasting(
+        cls, recording: Recording, seconds: float = 12.0, max_frames: int = 100
+    ) -> RunPlayer:
+        """A player whose whole run lasts about ``seconds`` at 8 frames a second, for a file.
+
+        A run shorter than ``seconds`` plays in real time, never slower.
+        """
+        first, last = recording.span
+        return cls(
+            recording, fps=8.0, speed=max(1.0, (last - first) / seconds), max_frames=max_frames
+        )
 
     def __len__(self) -> int:
         return len(self.times)

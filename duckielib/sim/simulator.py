@@ -102,14 +102,7 @@ class Trace:
 
     def led_colors_at(self, t: float) -> Tuple[RGB, ...]:
         """The five LEDs' RGB colours at time ``t`` (seconds); all off before any pattern."""
-        shown: Optional[Tuple[float, led_tables.Pattern]] = None
-        for since, pattern in self.patterns:
-            if since > t:
-                break
-            shown = (since, pattern)
-        if shown is None:
-            return ((0.0, 0.0, 0.0),) * led_tables.LED_COUNT
-        return led_tables.colors_at(shown[1], t - shown[0])
+        return led_tables.colors_shown(self.patterns, t)
 
     def led_colors(self) -> np.ndarray:
         """The LEDs' colours at every sample time, shape (N, 5, 3), RGB in [0, 1]."""

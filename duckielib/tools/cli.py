@@ -68,8 +68,7 @@ def _bag_animate(args: argparse.Namespace) -> int:
     from duckielib.plots import Recording, RunPlayer
 
     recording = Recording.from_bag(args.bag, camera_topic=args.camera)
-    first, last = recording.span
-    player = RunPlayer(recording, fps=8.0, speed=max(1.0, (last - first) / args.seconds))
+    player = RunPlayer.lasting(recording, args.seconds, max_frames=200)
     print(f"Wrote {player.save(args.output)} ({len(player)} frames).")
     return 0
 

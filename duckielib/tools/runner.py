@@ -532,7 +532,4 @@ def write_animation(bag: Path, title: str, path: Path, frames: int = 100) -> Pat
     from duckielib.sim.world import World
 
     recording = Recording.from_bag(bag, world=World(), title=title)
-    first, last = recording.span
-    fps = 8.0
-    player = RunPlayer(recording, fps=fps, speed=max(1.0, (last - first) / 12.0), max_frames=frames)
-    return player.save(path)
+    return RunPlayer.lasting(recording, max_frames=frames).save(path)
