@@ -82,6 +82,9 @@ ROBOT = "duckiebot"
 FIGURE_LIMIT = 2_000_000
 #: Frames of the feedback page's animation of a run (8 a second).
 ANIMATION_FRAMES = 64
+#: A bag with more messages than this is not played back (the reference's has about 23,000):
+#: a student's node that floods a topic must not stretch the grader's drawing.
+ANIMATION_MESSAGE_LIMIT = 100_000
 #: The missions whose run the feedback page plays back (about 2 s of the grader's time each;
 #: the others show their trajectory figure only).
 ANIMATED = ("square_then_circle",)
@@ -352,11 +355,14 @@ def _played_back(bag: Path, mission: str) -> Optional[bytes]:
     Drawn here, from the bag that was scored, rather than taken from the run's folder: the
     page shows what the grader judged.
     """
+    from duckielib.bags import Bag
     from duckielib.errors import DuckielibError
     from duckielib.tools.runner import write_animation
 
     path = bag.with_name("played_back.gif")
     try:
+        if Bag(bag).message_count > ANIMATION_MESSAGE_LIMIT:
+            return None
         write_animation(bag, f"{mission}: your run, as the grader read it", path, ANIMATION_FRAMES)
         return path.read_bytes()
     except (DuckielibError, ValueError, KeyError, IndexError, OSError):

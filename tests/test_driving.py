@@ -27,6 +27,7 @@ from autograder.driving import (
     score_bag,
 )
 from autograder.sandbox import Limits
+from duckielib.bags import Bag
 from duckielib.solution import export_solution
 from duckielib.tools.runner import MissionError, run_mission
 
@@ -282,6 +283,19 @@ def test_wrong_colours_lose_the_states_and_stops_but_keep_the_driving(tmp_path):
     }  # fmt: skip
     assert driving.score == 65
     assert driving.reasons[0] == ("State 1 should be wait in RED, but the bag shows wait in GREEN.")
+
+
+def test_a_flooded_bag_is_scored_but_not_played_back(tmp_path, monkeypatch):
+    import autograder.driving
+
+    run = run_mission(None, out=tmp_path / "run", animation=False)  # the reference
+    played = score_bag(tmp_path / "run")
+    assert played.animation[:6] == b"GIF89a"
+    count = Bag(run.files["bag"]).message_count
+    monkeypatch.setattr(autograder.driving, "ANIMATION_MESSAGE_LIMIT", count - 1)
+    flooded = score_bag(tmp_path / "run")
+    assert flooded.animation is None
+    assert flooded.score == played.score == 100
 
 
 def test_a_missing_or_broken_bag_scores_zero(tmp_path):
