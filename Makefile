@@ -22,11 +22,12 @@ ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-
 	python3-std-srvs python3-tf2-msgs python3-tf2-ros python3-tf bubblewrap python3-venv \
 	chromium ffmpeg
 
-.PHONY: help run test lab robot ros lint format bench lock clean
+.PHONY: help run test test-fast lab robot ros lint format bench lock clean
 
 help:
 	@echo "make run     drive the square-then-circle task in the simulator (bag, plot, summary)"
-	@echo "make test    run the whole test suite"
+	@echo "make test    run the whole test suite, on every core"
+	@echo "make test-fast  the quick tests only: the library and the commands (under 2 minutes)"
 	@echo "make lab     start JupyterLab on the course notebooks"
 	@echo "make robot   ready robot_nodes/ for the robot (SOLUTION=course: with your notebooks)"
 	@echo "make ros     install Debian's ROS 1, bubblewrap and Chromium (needs apt, root or sudo)"
@@ -45,8 +46,17 @@ $(STAMP): pyproject.toml constraints.txt
 run: $(STAMP)
 	$(BIN)/duckie mission --out runs/latest
 
+# Every core: pytest-xdist's workers take whole test modules (a module's shared setup is made
+# once), the longest first (tests/conftest.py), so that they finish together.
+PARALLEL ?= -n auto --dist loadscope --no-loadscope-reorder
+
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest $(PARALLEL)
+
+# The quick loop while changing the library or the commands: everything but the slow tests
+# (notebooks, grading, browsers, the real ROS master), in under two minutes.
+test-fast: $(STAMP)
+	$(BIN)/python -m pytest $(PARALLEL) -m "not slow and not notebook"
 
 # JupyterLab as students use it: the repository's files (the README among them) with course/
 # open, nbgrader's Validate checking every cell but not its instructor tools (duckielib/lab/),

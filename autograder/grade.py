@@ -30,6 +30,7 @@ import io
 import json
 import logging
 import os
+import socket
 import stat
 import tarfile
 import tempfile
@@ -450,18 +451,42 @@ def _kept(out: Path, student: str, key: str) -> Optional[StudentResult]:
         return None
 
 
+def _reachable(scheduler: str) -> None:
+    """Fail at once when nothing listens at a TCP scheduler's address.
+
+    Dask's client retries a refused connection until its timeout (30 s); a wrong address or a
+    scheduler that is not running is known within milliseconds, so it is said at once.
+
+    Raises:
+        OSError: if the address is refused, unknown or does not answer within 5 s.
+    """
+    from distributed.comm import parse_address, parse_host_port
+
+    protocol, location = parse_address(scheduler)
+    if protocol not in ("tcp", "tls"):
+        return
+    host, port = parse_host_port(location)
+    with socket.create_connection((host, port), timeout=5):
+        pass
+
+
+def _no_scheduler(scheduler: str, error: OSError) -> CourseError:
+    return CourseError(
+        f"No Dask scheduler answered at {scheduler} ({error}); start one with "
+        "`dask scheduler`, or leave out --scheduler to grade on this machine."
+    )
+
+
 def _client(jobs: int, scheduler: Optional[str]) -> Tuple[Any, Any]:
     """A Dask client: of the cluster at ``scheduler``, or of a local one with ``jobs`` workers."""
     from distributed import Client, LocalCluster
 
     if scheduler:
         try:
+            _reachable(scheduler)
             return Client(scheduler, timeout="30s"), None
         except OSError as error:
-            raise CourseError(
-                f"No Dask scheduler answered at {scheduler} ({error}); start one with "
-                "`dask scheduler`, or leave out --scheduler to grade on this machine."
-            ) from None
+            raise _no_scheduler(scheduler, error) from None
     cluster = LocalCluster(
         n_workers=jobs,
         threads_per_worker=1,
@@ -517,6 +542,11 @@ def grade_class(
         CourseError: if nbgrader cannot set the assignments up, or the scheduler is not there.
     """
     limits = limits or Limits()
+    if scheduler:
+        try:  # before the course is set up: a wrong address is said at once
+            _reachable(scheduler)
+        except OSError as error:
+            raise _no_scheduler(scheduler, error) from None
     out = Path(out).resolve()
     work = out / "work"
     work.mkdir(parents=True, exist_ok=True)
