@@ -43,7 +43,8 @@ class StudentResult:
             from the gradebook at every run.
         timings: where the unit's time went, in seconds: ``notebooks`` (the sandboxed runs,
             kernels' starts included), ``cells`` (the cells themselves), ``nbgrader`` (its
-            converters and gradebook), ``driving`` (export and mission), ``unit`` (all).
+            converters and gradebook), ``driving`` (export and mission), ``unit`` (all);
+            ``notebook:NAME``, each notebook's sandboxed run.
     """
 
     student: str

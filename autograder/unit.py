@@ -146,6 +146,7 @@ def _sandboxed_execute_class(unit: _Unit):
                 except Exception:  # damaged: the notebook's run is not trusted
                     problem = "answered with something that is not a notebook"
             unit.timings["notebooks"] += time.monotonic() - began
+            unit.timings[f"notebook:{name}"] = time.monotonic() - began
             if executed is None:
                 mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
                 unit.problems.append(f"{name}: the notebook {problem}.")

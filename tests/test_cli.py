@@ -60,6 +60,42 @@ def test_bench_mission_says_where_the_time_goes_and_leaves_messages_as_they_were
     assert String.from_bytes(String(data="hi").to_bytes()) == String(data="hi")
 
 
+@pytest.mark.notebook
+def test_bench_kernel_times_a_notebooks_kernel_and_first_cell_without_touching_course(
+    monkeypatch,
+):
+    from duckielib.tools.bench import kernel
+
+    monkeypatch.setattr(kernel, "NOTEBOOKS", ["03_frames"])
+    before = sorted((ROOT / "course" / "03_frames").rglob("*"))
+    figures = kernel.run()
+    names = [name for name, _ in figures]
+    assert names == [
+        "kernel_ready_s",
+        "first_cell_s",
+        "kernel_to_first_cell_s_03_frames",
+        "kernel_to_first_cell_max_s",
+        "kernel_to_first_cell_s",
+    ]
+    values = {name: float(value) for name, value in figures}
+    assert values["kernel_ready_s"] > 0
+    assert values["first_cell_s"] > 0
+    assert values["kernel_to_first_cell_s"] == pytest.approx(
+        values["kernel_ready_s"] + values["first_cell_s"], abs=0.011
+    )
+    assert sorted((ROOT / "course" / "03_frames").rglob("*")) == before
+
+
+def test_bench_kernel_says_which_first_cell_raised(tmp_path):
+    from duckielib.errors import DuckielibError
+    from duckielib.tools.bench.kernel import time_first_cell
+
+    box = tmp_path / "box"
+    box.mkdir()
+    with pytest.raises(DuckielibError, match=r"^The first cell of box raised ZeroDivisionError"):
+        time_first_cell(box, "1/0")
+
+
 def test_unknown_benchmark_is_one_sentence_without_traceback():
     result = duckie("bench", "warp-drive")
     assert result.returncode == 1

@@ -16,7 +16,6 @@ from typing import Optional
 import nbformat
 import pytest
 
-from autograder.bench import filled_course
 from autograder.course import ROOT
 from autograder.driving import MISSIONS
 from autograder.execute import NOT_RUN
@@ -284,37 +283,6 @@ def test_every_raising_cell_is_named_once_and_tests_and_cells_not_run_are_left_o
         "cell 6 (while True:): CellTimeoutError: still running after the 5 s a cell may take"
     )
     assert raised_outside_tests("07_control", sent, sent) is None
-
-
-@pytest.mark.notebook
-@pytest.mark.timeout(900)
-def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_problem(
-    sandbox, tmp_path
-):
-    # Every notebook as the grader runs it: in the sandbox, whole, with the driving score. A
-    # cell that needs a file the sandbox does not show (notebook 11 reads the robot project
-    # and pyproject.toml) would be a problem here, though nbgrader scored its tests.
-    filled_course(tmp_path / "submissions" / "ada")
-    (result,) = grade_class(tmp_path / "submissions", tmp_path / "out", jobs=1)
-    assert result.problems == []
-    # Full marks in everything the grader scores. The answers in words were left as released
-    # (the filled course writes code only): nbgrader scores an unanswered answer 0 by itself.
-    answers = {key: value for key, value in result.cells.items() if key[1].startswith("answer_")}
-    assert len(answers) == 8
-    assert {value[0] for value in answers.values()} == {0.0}
-    assert result.to_grade == []
-    unanswered = "No answer was written here, so it scores 0."
-    assert {result.messages.get(key) for key in answers} == {unanswered}
-    page = (tmp_path / "out" / "feedback" / "ada.html").read_text()
-    assert f"<td>answer_speed</td><td>0 / 2</td><td>{unanswered}</td>" in page
-    assert result.total == result.max_total - sum(most for _, most in answers.values()) > 60
-    assert result.driving_score == 100
-    assert {name: driving.score for name, driving in result.missions.items()} == dict.fromkeys(
-        MISSIONS, 100
-    ), {name: driving.reasons for name, driving in result.missions.items()}
-    # The main mission is played back on the page; the others show their figure only.
-    assert page.count('src="data:image/gif;base64,') == 1
-    assert page.count('src="data:image/png;base64,') == len(MISSIONS)
 
 
 def test_duckie_grade_refuses_a_missing_folder(tmp_path):

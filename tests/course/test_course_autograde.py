@@ -1,7 +1,8 @@
-"""Gates with real nbgrader: the solutions score full marks, the release scores zero, mistakes lose.
+"""Gates with the class grader: the solutions score full marks, the release zero, mistakes lose.
 
-Three students are autograded on every assignment, as an instructor would grade them:
-``filled`` is the released course with every graded cell filled with the reference code,
+One class is graded once, as an instructor grades it with ``duckie grade`` (real nbgrader, each
+notebook in the sandbox, the driving score), and every test here reads its results:
+``reference`` is the released course with every graded cell filled with the reference code,
 ``untouched`` is the released course as students receive it, and ``mistaken`` has the first
 deliberately wrong solution of every graded cell (see ``wrong_*.py``).
 """
@@ -19,31 +20,31 @@ from coursetools import (
     wrong_solutions,
 )
 
-from autograder.course import autograde
+from autograder.driving import MISSIONS
+from autograder.grade import grade_class
+from autograder.sandbox import Limits
 from duckielib.solution import CONTRACT, load_solution
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook, pytest.mark.timeout(1200)]
 
 
 @pytest.fixture(scope="module")
-def graded(tmp_path_factory):
+def graded(sandbox, tmp_path_factory):
     root = tmp_path_factory.mktemp("grading")
-    filled = reference_answers()
     first_mistakes = {}
     for (name, grade_id, _), text in wrong_solutions().items():
         first_mistakes.setdefault((name, grade_id), text)
-    students = {
-        "filled": student_copy(root / "filled", filled),
-        "untouched": student_copy(root / "untouched", {}),
-        "mistaken": student_copy(root / "mistaken", first_mistakes),
-    }
-    scores = autograde(students, root / "nbgrader")
-    return root, scores, first_mistakes
+    submissions = root / "submissions"
+    student_copy(submissions / "reference", reference_answers())
+    student_copy(submissions / "untouched", {})
+    student_copy(submissions / "mistaken", first_mistakes)
+    results = grade_class(submissions, root / "out", jobs=2, limits=Limits())
+    return root, {result.student: result for result in results}, first_mistakes
 
 
 def test_the_reference_code_scores_full_marks_in_every_cell(graded):
-    _, scores, _ = graded
-    cells = scores["filled"].cells
+    _, results, _ = graded
+    cells = results["reference"].cells
     assert cells, "no graded cell was found"
     answers = answer_keys()
     short = {
@@ -57,9 +58,37 @@ def test_the_reference_code_scores_full_marks_in_every_cell(graded):
     assert {name for name, _ in cells} == set(NAMES)
 
 
+def test_a_finished_course_graded_in_the_sandbox_scores_everything_with_no_problem(graded):
+    # Every notebook as the grader runs it: in the sandbox, whole, with the driving score. A
+    # cell that needs a file the sandbox does not show (notebook 11 reads the robot project
+    # and pyproject.toml) would be a problem here, though nbgrader scored its tests.
+    root, results, _ = graded
+    result = results["reference"]
+    assert result.problems == []
+    # Full marks in everything the grader scores. The answers in words were left as released
+    # (the filled course writes code only): nbgrader scores an unanswered answer 0 by itself.
+    answers = {key: value for key, value in result.cells.items() if key[1].startswith("answer_")}
+    assert len(answers) == 8
+    assert {value[0] for value in answers.values()} == {0.0}
+    assert result.to_grade == []
+    unanswered = "No answer was written here, so it scores 0."
+    assert {result.messages.get(key) for key in answers} == {unanswered}
+    page = (root / "out" / "feedback" / "reference.html").read_text()
+    assert f"<td>answer_speed</td><td>0 / 2</td><td>{unanswered}</td>" in page
+    assert result.total == result.max_total - sum(most for _, most in answers.values()) > 60
+    assert result.driving_score == 100
+    assert {name: driving.score for name, driving in result.missions.items()} == dict.fromkeys(
+        MISSIONS, 100
+    ), {name: driving.reasons for name, driving in result.missions.items()}
+    # The main mission is played back on the page; the others show their figure only.
+    assert page.count('src="data:image/gif;base64,') == 1
+    assert page.count('src="data:image/png;base64,') == len(MISSIONS)
+
+
 def test_each_notebook_runs_in_under_a_minute_and_all_in_three(graded):
-    _, scores, _ = graded
-    seconds = scores["filled"].seconds
+    _, results, _ = graded
+    timings = results["reference"].timings
+    seconds = {name: timings[f"notebook:{name}"] for name in NAMES}
     print({name: round(value, 1) for name, value in seconds.items()})
     slow = {name: value for name, value in seconds.items() if value >= 60}
     assert not slow, f"notebooks over 60 s: {slow}"
@@ -67,20 +96,21 @@ def test_each_notebook_runs_in_under_a_minute_and_all_in_three(graded):
 
 
 def test_the_untouched_release_scores_zero_and_runs_to_the_end(graded):
-    root, scores, _ = graded
-    cells = scores["untouched"].cells
+    root, results, _ = graded
+    cells = results["untouched"].cells
     assert {key: value[0] for key, value in cells.items() if value[0] != 0} == {}
     assert sum(value[1] for value in cells.values()) > 0
     for name in NAMES:
-        notebook = load(notebook_path(root / "nbgrader" / "autograded" / "untouched", name))
+        notebook = load(notebook_path(root / "out" / "work" / "autograded" / "untouched", name))
         code = [cell for cell in notebook["cells"] if cell["cell_type"] == "code"]
         not_run = [index for index, cell in enumerate(code) if cell["execution_count"] is None]
         assert not not_run, f"{name}: code cells {not_run} never ran (did the kernel die?)"
+    assert results["untouched"].driving_score == 0
 
 
 def test_each_wrong_solution_loses_marks_in_its_own_test_cell(graded):
-    _, scores, mistakes = graded
-    cells = scores["mistaken"].cells
+    _, results, mistakes = graded
+    cells = results["mistaken"].cells
     assert mistakes
     kept = {
         key: cells[(key[0], f"test_{key[1]}")]
@@ -92,5 +122,5 @@ def test_each_wrong_solution_loses_marks_in_its_own_test_cell(graded):
 
 def test_a_filled_course_exports_as_a_complete_solution(graded):
     root, _, _ = graded
-    solution = load_solution(root / "filled", required=list(CONTRACT))
+    solution = load_solution(root / "submissions" / "reference", required=list(CONTRACT))
     assert solution.delta_phi(10, 0, 135)[1] == 10

@@ -38,6 +38,10 @@ BENCHMARKS: Dict[str, Tuple[str, str]] = {
         "duckielib.tools.bench.mission",
         "real-time factor of the whole square-then-circle mission (nodes, odometry, bag)",
     ),
+    "kernel": (
+        "duckielib.tools.bench.kernel",
+        "seconds from starting a notebook's kernel to its first cell's result, per notebook",
+    ),
     "bags": (
         "duckielib.tools.bench.bags",
         "odometry replayed from a 100,000-message encoder bag, and Debian's rosbag reading it",
