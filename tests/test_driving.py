@@ -63,8 +63,15 @@ def test_the_points_split_the_driving_over_the_moving_states():
     assert part_points("d_shape")["d"] == 20
 
 
-def test_the_reference_drives_every_graded_mission_for_full_marks(sandbox, tmp_path):
-    missions = drive_missions(ROOT / "solutions", tmp_path / "box", Limits())
+@pytest.fixture(scope="module")
+def reference_drives(sandbox, tmp_path_factory):
+    """The reference's notebooks driving every graded mission in the sandbox, and its folder."""
+    box = tmp_path_factory.mktemp("reference") / "box"
+    return drive_missions(ROOT / "solutions", box, Limits()), box
+
+
+def test_the_reference_drives_every_graded_mission_for_full_marks(reference_drives):
+    missions, box = reference_drives
     assert (
         list(missions)
         == list(MISSIONS)
@@ -82,9 +89,7 @@ def test_the_reference_drives_every_graded_mission_for_full_marks(sandbox, tmp_p
     assert [(m["state"], m["passed"]) for m in missions["rotation"].summary["motion"]] == [
         ("clockwise", 1), ("back", 1),
     ]  # fmt: skip
-    assert sorted(path.name for path in (tmp_path / "box").iterdir()) == sorted(
-        [*MISSIONS, "solution.py"]
-    )
+    assert sorted(path.name for path in box.iterdir()) == sorted([*MISSIONS, "solution.py"])
 
 
 def test_a_node_that_never_ends_loses_the_states_points_with_a_sentence(
@@ -114,17 +119,17 @@ def test_a_mission_that_runs_out_of_wall_time_leaves_the_next_ones_undriven(sand
         "    while True:\n        sum(range(200000))\n        rospy.get_time()\n"
     )
     solution.write_text(source + slow)
-    missions = drive_missions(solution, tmp_path / "box", Limits(mission_seconds=15))
+    missions = drive_missions(solution, tmp_path / "box", Limits(mission_seconds=8))
     assert missions["square_then_circle"].timed_out
     assert {name: driving.score for name, driving in missions.items()} == dict.fromkeys(MISSIONS, 0)
     assert missions["rotation"].reasons == [
-        "Not driven: the square_then_circle mission did not end within 15 s of wall time, and "
+        "Not driven: the square_then_circle mission did not end within 8 s of wall time, and "
         "the same nodes drive this one."
     ]
 
 
-def test_the_reference_drives_the_mission_for_full_marks(sandbox, tmp_path):
-    driving = drive(ROOT / "solutions", tmp_path / "box", Limits())
+def test_the_reference_drives_the_mission_for_full_marks(reference_drives):
+    driving = reference_drives[0]["square_then_circle"]
     assert driving.score == MAX_SCORE == 100
     assert driving.parts == part_points()
     assert driving.reasons == []
@@ -376,8 +381,9 @@ def test_a_mission_stuck_in_its_square_is_scored_state_by_state(tmp_path, refere
     solution = changed(
         reference, "ticks_turned = ticks - prev_ticks", "ticks_turned = ticks", tmp_path / "s.py"
     )
-    with pytest.raises(MissionError):
-        run_mission(solution=solution, out=tmp_path / "run", animation=False)
+    # The whole mission takes 62 simulated seconds: in 150, this square has long been stuck.
+    with pytest.raises(MissionError, match="within 150 simulated s"):
+        run_mission(solution=solution, out=tmp_path / "run", animation=False, time_limit=150)
     driving = score_bag(tmp_path / "run")
     assert driving.parts["return"] == driving.parts["circle"] == 0
     assert driving.parts["bag"] == POINTS["bag"]

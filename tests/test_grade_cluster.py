@@ -54,6 +54,17 @@ def _grades(results):
     return {result.student: (result.cells, result.problems) for result in results}
 
 
+@pytest.fixture(scope="module")
+def graded_here(sandbox, tmp_path_factory):
+    """The class graded on this machine (a local cluster of two): its folders and results."""
+    root = tmp_path_factory.mktemp("local")
+    submissions = _class(root / "submissions")
+    results = grade_class(
+        submissions, root / "out", jobs=2, names=[ASSIGNMENT], limits=LIMITS, driving=False
+    )
+    return submissions, root / "out", results
+
+
 @pytest.fixture
 def cluster():
     """A scheduler and two workers without nannies: a killed worker stays dead."""
@@ -62,12 +73,9 @@ def cluster():
 
 
 def test_a_cluster_grades_as_the_local_run_and_loses_no_student_to_a_dead_worker(
-    sandbox, tmp_path, cluster
+    graded_here, tmp_path, cluster
 ):
-    submissions = _class(tmp_path / "submissions")
-    local = grade_class(
-        submissions, tmp_path / "local", jobs=2, names=[ASSIGNMENT], limits=LIMITS, driving=False
-    )
+    submissions, _, local = graded_here
     killed = []
 
     def kill_a_busy_worker() -> None:
@@ -114,11 +122,13 @@ def test_duckie_grade_refuses_a_scheduler_that_is_not_there(tmp_path):
     assert "Traceback" not in result.stderr
 
 
-def test_a_second_run_grades_only_the_new_and_the_changed(sandbox, tmp_path):
-    submissions = _class(tmp_path / "submissions")
-    out = tmp_path / "out"
+def test_a_second_run_grades_only_the_new_and_the_changed(graded_here, tmp_path):
+    # The class as graded once (a copy of its folders), graded again after changes.
+    submissions, out = tmp_path / "submissions", tmp_path / "out"
+    shutil.copytree(graded_here[0], submissions, symlinks=True)
+    shutil.copytree(graded_here[1], out, symlinks=True)
+    first = graded_here[2]
     lines = []
-    first = grade_class(submissions, out, names=[ASSIGNMENT], limits=LIMITS, driving=False)
     kept = {path.name: path.stat().st_mtime_ns for path in (out / "results").iterdir()}
     # Ben fixes nothing, Cy solves it at last, and Eve hands in late.
     shutil.copytree(submissions / "ada", submissions / "eve")
