@@ -8,6 +8,7 @@ packages first. On a laptop without them, those tests are skipped with the reaso
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -42,6 +43,14 @@ LONGEST_FIRST = (
     "tests/real_ros/test_bag_replay.py",
     "tests/test_formgrade_browser.py",
 )
+
+
+def pytest_configure(config):
+    # A suite started in the background (`nohup make test &`) begins with Ctrl-C ignored, and
+    # every process it starts would inherit that: the tests of what Ctrl-C does need it as in
+    # a terminal. (A handler, unlike "ignore", is not passed on to the processes started.)
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_collection_modifyitems(config, items):
