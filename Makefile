@@ -22,13 +22,14 @@ ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-
 	python3-std-srvs python3-tf2-msgs python3-tf2-ros python3-tf bubblewrap python3-venv \
 	chromium ffmpeg
 
-.PHONY: help run test test-fast lab robot ros lint format bench lock clean
+.PHONY: help venv run test test-fast lab robot ros lint format bench lock clean
 
 help:
 	@echo "make run     drive the square-then-circle task in the simulator (bag, plot, summary)"
 	@echo "make test    run the whole test suite, on every core"
 	@echo "make test-fast  the quick tests only: the library and the commands (under 2 minutes)"
 	@echo "make lab     start JupyterLab on the course notebooks"
+	@echo "make venv    create .venv with the project installed (every other target does it too)"
 	@echo "make robot   ready robot_nodes/ for the robot (SOLUTION=course: with your notebooks)"
 	@echo "make ros     install Debian's ROS 1, bubblewrap and Chromium (needs apt, root or sudo)"
 	@echo "make lint    check and format the code with ruff"
@@ -42,6 +43,8 @@ $(STAMP): pyproject.toml constraints.txt
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[dev]'
 	@touch $(STAMP)
+
+venv: $(STAMP)
 
 run: $(STAMP)
 	$(BIN)/duckie mission --out runs/latest

@@ -128,6 +128,33 @@ def test_a_bag_with_the_camera_shows_its_latest_frame_beside_the_mat(tmp_path):
     assert camera_side.std() > 20  # a picture, not a blank panel
 
 
+def test_frames_drawn_over_the_still_mat_are_the_whole_drawings_pixel_for_pixel(
+    mission_player, tmp_path
+):
+    # The still parts are drawn once and each frame only draws what moves over them: the
+    # pictures must be exactly those of drawing everything, in any order of times, with the
+    # camera beside the mat and with a robot hidden before its first pose.
+    bot = VirtualDuckiebot(seed=0)
+    topics = [
+        bot.namespace + name
+        for name in ("camera_node/image/compressed", "simulator_node/ground_truth_pose")
+    ]
+    bot.run(0.2)
+    with BagRecorder(tmp_path / "camera.bag", topics, graph=bot.graph):
+        bot.sim.set_wheel_duties(0.4, 0.5)
+        bot.run(0.5)
+    for player in (mission_player, RunPlayer(tmp_path / "camera.bag")):
+        last = len(player) - 1
+        for index in (last // 2, 0, last, last // 3):
+            fast = player.frame(index)
+            whole = player._frame.whole(float(player.times[index]))
+            assert fast.shape == whole.shape
+            assert np.array_equal(fast, whole), f"frame {index}: {(fast != whole).sum()} values"
+    hidden = mission_player._frame.rgb(mission_player.times[0] - 5.0)  # before any pose
+    assert np.array_equal(hidden, mission_player._frame.whole(mission_player.times[0] - 5.0))
+    assert pixels_near(hidden, CHASSIS, tolerance=8) == 0
+
+
 def test_a_bag_with_nothing_to_play_or_without_the_camera_asked_for_says_so(tmp_path):
     path = tmp_path / "chatter.bag"
     with BagWriter(path) as writer:

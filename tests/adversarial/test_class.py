@@ -93,7 +93,7 @@ def graded(sandbox, tmp_path_factory):
         out,
         jobs=2,
         names=GRADED,
-        limits=Limits(cell_seconds=30, submission_seconds=300, mission_seconds=40),
+        limits=Limits(cell_seconds=15, submission_seconds=300, mission_seconds=20),
     )
     return {result.student: result for result in results}, out
 
@@ -157,19 +157,19 @@ def test_code_that_hangs_on_import_is_stopped_and_reported(graded):
     assert _lost(stuck) == []
     assert stuck.driving_score == 0
     first, *others = stuck.missions.values()
-    assert first.reasons == ["The mission did not end within 40 s of wall time."]
+    assert first.reasons == ["The mission did not end within 20 s of wall time."]
     assert [driving.reasons for driving in others] == [
         [
-            "Not driven: the square_then_circle mission did not end within 40 s of wall time, "
+            "Not driven: the square_then_circle mission did not end within 20 s of wall time, "
             "and the same nodes drive this one."
         ]
     ] * 3
     # Notebook 11 loads the student's solution too: its cells that import it run out of time.
     timeouts, driving = stuck.problems
     assert timeouts.startswith("11_to_the_robot: 5 cells outside the tests raised: cell 4 (mine")
-    assert "CellTimeoutError: still running after the 30 s a cell may take" in timeouts
+    assert "CellTimeoutError: still running after the 15 s a cell may take" in timeouts
     assert (
-        driving == "Driving: the square_then_circle mission did not end within 40 s of wall time."
+        driving == "Driving: the square_then_circle mission did not end within 20 s of wall time."
     )
 
 
