@@ -26,10 +26,12 @@ drives earns none of them. Stopping is in the stops' points (after each move the
 stand still through the next wait), ending is in the states' (the mission node must announce
 "done" and return, as a node that exits properly does).
 
-Everything the run wrote is read through :func:`autograder.files.read_regular` and scored
-from the grader's own copy: no link is followed (the run's folder included), and a bag that is a
-FIFO, a device or bigger than :data:`BAG_LIMIT` is not read; the run then scores zero, with a
-sentence saying why (a figure like that is only left out).
+The run's bag is read through :func:`autograder.files.read_regular` and scored from the
+grader's own copy: no link is followed (the run's folder included), and a bag that is a FIFO, a
+device or bigger than :data:`BAG_LIMIT` is not read; the run then scores zero, with a sentence
+saying why. The feedback page's trajectory figure and animation are drawn by the grader from
+that copy too (the run is started with ``--no-figure``): nothing else the student's process
+wrote reaches the page.
 
 A run that stops early (a node fails, the mission does not announce its end within the
 simulated time limit, or the wall-clock limit kills it) is scored from the bag it left, with
@@ -78,8 +80,6 @@ POINTS = {"bag": 5.0, "states": 20.0, "stops": 15.0, "motion": 60.0}
 MAX_SCORE = sum(POINTS.values())
 #: The robot's name in the run (its namespace).
 ROBOT = "duckiebot"
-#: The trajectory figure may be at most this big (bytes); a larger file is left out.
-FIGURE_LIMIT = 2_000_000
 #: Frames of the feedback page's animation of a run (8 a second).
 ANIMATION_FRAMES = 64
 #: A bag with more messages than this is not played back (the reference's has about 23,000):
@@ -91,7 +91,6 @@ ANIMATED = ("square_then_circle",)
 #: The run's bag (or its unfinished recording) may be at most this big (bytes); a larger one
 #: is not read. The reference's bag is under 10 MB.
 BAG_LIMIT = 200 * 1024**2
-_PNG = b"\x89PNG\r\n\x1a\n"
 
 
 @dataclass
@@ -229,7 +228,7 @@ def drive(
         The driving score with its reasons.
     """
     command = [sys.executable, "-m", "duckielib.tools.cli", "mission", "--solution", "solution.py"]
-    command += ["--mission", mission, "--out", mission, "--no-animation"]
+    command += ["--mission", mission, "--out", mission, "--no-animation", "--no-figure"]
     run_folder = folder / mission
     try:
         result = run(
@@ -278,7 +277,6 @@ def _score_unfinished(run: Path, mission: str, why: str) -> Driving:
             except (DuckielibError, ValueError, OSError):
                 return Driving(out_of=out_of, reasons=[why])
         driving = _score_copy(bag, mission)
-    driving.figure = _figure(run)
     if not driving.parts.get("bag"):  # nothing of the mission reached the bag
         return Driving(out_of=out_of, reasons=[why])
     driving.finished = False
@@ -340,13 +338,19 @@ def _copy(run: Path, name: str, scratch: Path, what: str) -> Path:
     return target
 
 
-def _figure(run: Path) -> Optional[bytes]:
-    """The run's trajectory figure: PNG bytes of at most :data:`FIGURE_LIMIT`, or None."""
+def _drawn(tracks: List[Any], report: Any, bag: Path) -> Optional[bytes]:
+    """The trajectory figure of the grader's copy of the bag, as PNG bytes, or None.
+
+    Drawn here, as the animation is, rather than taken from the run's folder: the page shows
+    the run the grader scored, and nothing the student's process wrote.
+    """
+    from duckielib.errors import DuckielibError
+    from duckielib.tools.runner import trajectory_figure
+
     try:
-        data = _read(run, "trajectory.png", FIGURE_LIMIT, "The figure")
-    except _Unread:
+        return trajectory_figure(tracks, report, bag.with_name("trajectory.png")).read_bytes()
+    except (DuckielibError, ValueError, KeyError, IndexError, OSError):
         return None
-    return data if data.startswith(_PNG) else None
 
 
 def _played_back(bag: Path, mission: str) -> Optional[bytes]:
@@ -392,12 +396,12 @@ def _without_paths(text: str) -> str:
 def score_bag(run: Path, mission: str = "square_then_circle") -> Driving:
     """Score the run in folder ``run`` from its bag, copied and read by the grader.
 
-    The bag and the figure are read without following links (``run`` itself included) and
-    only if they are regular files of at most :data:`BAG_LIMIT` and :data:`FIGURE_LIMIT`
-    bytes; the bag is copied into a folder of the grader's own, and that copy is scored.
+    The bag is read without following links (``run`` itself included) and only if it is a
+    regular file of at most :data:`BAG_LIMIT` bytes; it is copied into a folder of the
+    grader's own, and that copy is scored and drawn (the trajectory figure, the animation).
 
     Args:
-        run: the folder ``duckie mission`` wrote (``mission.bag``, ``trajectory.png``).
+        run: the folder ``duckie mission`` wrote (``mission.bag``).
         mission: the mission that was driven.
     """
     out_of = part_points(mission)
@@ -407,9 +411,7 @@ def score_bag(run: Path, mission: str = "square_then_circle") -> Driving:
         except _Unread as unread:
             why = "The mission wrote no bag." if unread.missing else unread.reason
             return Driving(out_of=out_of, reasons=[why])
-        driving = _score_copy(bag, mission)
-    driving.figure = _figure(run)
-    return driving
+        return _score_copy(bag, mission)
 
 
 def _score_copy(path: Path, mission: str) -> Driving:
@@ -449,6 +451,7 @@ def _score_copy(path: Path, mission: str) -> Driving:
     earned.update(zip(moving, (motion.fraction for motion in motions)))
     driving.parts = {name: round(out_of[name] * earned[name], 2) for name in out_of}
     driving.score = round(sum(driving.parts.values()), 2)
+    driving.figure = _drawn(tracks, report, path)
     if mission in ANIMATED:
         driving.animation = _played_back(path, mission)
     return driving

@@ -216,13 +216,23 @@ def _set_up(work: Path, source: Path, course: List[str], names: List[str]) -> _C
 _UNPACKED: Dict[str, Path] = {}
 
 
+def _scratch() -> Optional[str]:
+    """The Dask worker's own folder, removed with the worker: the unpacked course goes there."""
+    from distributed import get_worker
+
+    try:
+        return get_worker().local_directory
+    except ValueError:  # not on a worker
+        return None
+
+
 def _grade_on_worker(
     task: Dict[str, Any], files: Dict[str, bytes], key: str, blob: bytes
 ) -> Dict[str, Any]:
     """The Dask task: one student's unit, on whichever worker runs it."""
     course = _UNPACKED.get(key)
     if course is None or not course.is_dir():
-        course = Path(tempfile.mkdtemp(prefix="duckie-course-"))
+        course = Path(tempfile.mkdtemp(prefix="duckie-course-", dir=_scratch()))
         with tarfile.open(fileobj=io.BytesIO(blob), mode="r:gz") as archive:
             archive.extractall(course, filter="data")
         _UNPACKED[key] = course

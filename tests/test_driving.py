@@ -9,6 +9,7 @@ from __future__ import annotations
 import io
 import os
 import re
+import shutil
 import struct
 import subprocess
 
@@ -90,6 +91,23 @@ def test_the_reference_drives_every_graded_mission_for_full_marks(reference_driv
         ("clockwise", 1), ("back", 1),
     ]  # fmt: skip
     assert sorted(path.name for path in box.iterdir()) == sorted([*MISSIONS, "solution.py"])
+    # The runs draw no figure: the grader draws each from its own copy of the bag.
+    assert not list(box.glob("*/trajectory.png"))
+    assert all(driving.figure.startswith(b"\x89PNG") for driving in missions.values())
+
+
+def test_a_figure_left_in_the_run_folder_never_reaches_the_page(reference_drives, tmp_path):
+    # A student's process may write any trajectory.png next to its bag: the page shows the
+    # grader's drawing of the bag it scored.
+    missions, box = reference_drives
+    run = shutil.copytree(box / "rotation", tmp_path / "rotation")
+    forged = b"\x89PNG\r\n\x1a\n" + b"not the run" * 100
+    (run / "trajectory.png").write_bytes(forged)
+    driving = score_bag(run, "rotation")
+    assert driving.score == 100
+    assert driving.figure.startswith(b"\x89PNG")
+    assert driving.figure != forged
+    assert driving.figure == missions["rotation"].figure
 
 
 def test_a_node_that_never_ends_loses_the_states_points_with_a_sentence(
@@ -103,7 +121,7 @@ def test_a_node_that_never_ends_loses_the_states_points_with_a_sentence(
     }  # fmt: skip
     assert driving.reasons[0] == (
         "The mission could not run to its end: The mission node announced 'done' but did not "
-        "end within 600 simulated seconds: a node must return once its work is done (a loop "
+        "end within 240 simulated seconds: a node must return once its work is done (a loop "
         "that never stops, or rospy.spin(), keeps it alive)."
     )
 
@@ -216,7 +234,7 @@ def test_a_square_turned_the_wrong_way_loses_the_square_but_not_the_circle(tmp_p
 def test_a_mission_past_the_simulated_time_limit_is_scored_from_its_bag(tmp_path, reference):
     # The node drives every state, then waits for ever instead of announcing "done".
     endless = changed(reference, _DONE, "while True:\n        rospy.sleep(1.0)", tmp_path / "s.py")
-    with pytest.raises(MissionError, match="did not announce 'done' within 600 simulated s"):
+    with pytest.raises(MissionError, match="did not announce 'done' within 240 simulated s"):
         run_mission(endless, out=tmp_path / "run", animation=False)
     assert (tmp_path / "run" / "summary.json").is_file(), "the summary is written before it fails"
     driving = score_bag(tmp_path / "run")
@@ -232,7 +250,7 @@ def test_a_mission_that_never_ends_is_scored_from_its_bag_in_the_sandbox(
     endless = changed(reference, _DONE, "while True:\n        rospy.sleep(1.0)", tmp_path / "s.py")
     driving = drive(endless, tmp_path / "box", Limits(mission_seconds=120))
     assert driving.reasons[:2] == [
-        "The mission could not run to its end: The mission did not announce 'done' within 600 "
+        "The mission could not run to its end: The mission did not announce 'done' within 240 "
         "simulated seconds (last log: state circle (YELLOW)).",
         "It is scored from the bag it wrote until then.",
     ]

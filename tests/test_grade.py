@@ -10,6 +10,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 from typing import Optional
 
@@ -147,6 +148,7 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
     _submission(submissions, "cy", ROOT / "solutions", edit=_loop_forever)
     (submissions / "dee").mkdir()
     lines = []
+    unpacked = set(Path(tempfile.gettempdir()).glob("duckie-course-*"))
     results = grade_class(
         submissions,
         tmp_path / "out",
@@ -156,6 +158,8 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
         progress=lines.append,
     )
     by_name = {result.student: result for result in results}
+    # The course each worker unpacked went with the worker's own folder.
+    assert set(Path(tempfile.gettempdir()).glob("duckie-course-*")) == unpacked
     assert by_name["ada"].total == by_name["ada"].max_total > 0
     assert by_name["ben"].total == 0
     assert by_name["ben"].max_total == by_name["ada"].max_total

@@ -250,6 +250,7 @@ def _mission(args: argparse.Namespace) -> int:
         out=args.out,
         stop_color=args.stop_color,
         animation=not args.no_animation,
+        figure=not args.no_figure,
     )
     print(run.text())
     return 0
@@ -318,6 +319,9 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
     mission.add_argument("--out", default="runs/latest", help="folder for the bag, plot, summary")
     mission.add_argument(
         "--no-animation", action="store_true", help="skip mission.gif (a few seconds faster)"
+    )
+    mission.add_argument(
+        "--no-figure", action="store_true", help="skip trajectory.png (the grader draws its own)"
     )
     mission.set_defaults(handler=_mission)
 

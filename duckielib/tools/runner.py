@@ -54,6 +54,8 @@ __all__ = [
     "RECORDED",
     "drive_and_record",
     "run_mission",
+    "trajectory_figure",
+    "write_animation",
 ]
 
 #: The files a run writes in its folder.
@@ -71,8 +73,10 @@ RECORDED = (
     "mission_node/state",
 )
 
-#: Simulated seconds a mission may take before it is stopped.
-DEFAULT_TIME_LIMIT_S = 600.0
+#: Simulated seconds a mission may take before it is stopped: four times the longest mission
+#: with the reference solution (square then circle, about 62 s). A run still going then is
+#: stuck, and saying so after 240 simulated seconds keeps the wait short.
+DEFAULT_TIME_LIMIT_S = 240.0
 
 #: The student's nodes, whose errors stop the run with their message.
 _STUDENT_NODES = ("odometry_node", "light_service_node", "mission_node")
@@ -258,6 +262,7 @@ def run_mission(
     stop_color: Optional[str] = None,
     animation: bool = True,
     time_limit: float = DEFAULT_TIME_LIMIT_S,
+    figure: bool = True,
 ) -> MissionRun:
     """Run ``mission`` on the virtual Duckiebot with ``solution`` and write its files to ``out``.
 
@@ -275,6 +280,7 @@ def run_mission(
         stop_color: the LED pattern of the stop states, if not the mission's (``"RED"``).
         animation: whether to write ``mission.gif`` (it takes a few seconds).
         time_limit: simulated seconds after which an unfinished mission is stopped.
+        figure: whether to draw ``trajectory.png`` (the grader draws its own, from the bag).
 
     Returns:
         The run: its report, summary and files.
@@ -303,14 +309,17 @@ def run_mission(
             parts, chosen, noise, seed, files, time_limit
         )
     if failure is None:
-        return _write_run(chosen, namespace, noise, seed, label, files, simulated, wall, animation)
+        return _write_run(
+            chosen, namespace, noise, seed, label, files, simulated, wall, animation, figure=figure
+        )
     if files["bag"].is_file():
         # What the robot did until the run stopped is worth keeping: the summary says why.
         with contextlib.suppress(DuckielibError, ValueError, KeyError, IndexError, OSError):
             # A bag too short to summarise: the failure below says what went wrong.
             _write_run(
-                chosen, namespace, noise, seed, label, files, simulated, wall, False, failure
-            )
+                chosen, namespace, noise, seed, label, files, simulated, wall, False, failure,
+                figure=figure,
+            )  # fmt: skip
     raise failure
 
 
@@ -325,6 +334,7 @@ def _write_run(
     wall: float,
     animation: bool,
     failure: Optional[DuckielibError] = None,
+    figure: bool = True,
 ) -> MissionRun:
     """Read the run's bag and write its figure, animation and summary next to it."""
     from duckielib.bags import pose_tracks
@@ -345,8 +355,8 @@ def _write_run(
             "error": None if failure is None else str(failure),
         }
     )
-    tracks = _named_tracks(tracks)
-    files["trajectory"] = _trajectory_figure(tracks, report, folder / "trajectory.png")
+    if figure:
+        files["trajectory"] = trajectory_figure(tracks, report, folder / "trajectory.png")
     if animation:
         files["animation"] = _animation(files["bag"], chosen, label, noise, folder / "mission.gif")
     files["summary"] = folder / "summary.json"
@@ -498,11 +508,21 @@ def _label(track: Any) -> str:
     return track.label
 
 
-def _trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> Path:
+def trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> Path:
+    """Draw a run's ``trajectory.png``: odometry against the truth on the mat, and over time.
+
+    Args:
+        tracks: the run's pose tracks, as ``pose_tracks(bag, "record")`` reads them.
+        report: the run's mission report (the title and the start pose).
+        path: the PNG to write.
+
+    Returns:
+        The path written.
+    """
     from duckielib import plots
 
     figure = plots.pose_figure(
-        tracks,
+        _named_tracks(tracks),
         title=f"{report.mission.name}: odometry and truth",
         reference=report.mission.start,
     )

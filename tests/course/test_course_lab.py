@@ -111,6 +111,10 @@ FINISHED = """([prompts, stderr]) => {
     return shown.every((prompt) => /\\[\\d+\\]/.test(prompt)) || !!document.querySelector(stderr);
 }"""
 
+#: How often the page is asked whether Run All has begun or ended, in ms (by default it is
+#: asked at every frame drawn, which keeps the browser busy while the kernel works).
+POLL_MS = 200
+
 #: Run All has begun: some cell waits or has run.
 STARTED = """(prompts) => [...document.querySelectorAll(prompts)]
     .some((prompt) => /\\[(\\*|\\d+)\\]/.test(prompt.textContent))"""
@@ -129,11 +133,13 @@ def run_all_in_the_browser(page, port, name):
         page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
         page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
         try:
-            page.wait_for_function(STARTED, arg=PROMPTS, timeout=20_000)
+            page.wait_for_function(STARTED, arg=PROMPTS, polling=POLL_MS, timeout=20_000)
             break
         except PlaywrightTimeout:
             page.keyboard.press("Escape")
-    page.wait_for_function(FINISHED, arg=[PROMPTS, STDERR], timeout=180_000)
+    page.wait_for_function(
+        FINISHED, arg=[PROMPTS, STDERR], polling=POLL_MS, timeout=180_000
+    )
 
 
 def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, browser):
@@ -309,6 +315,7 @@ def test_a_student_plays_a_run_in_the_player_and_sees_the_robot_its_lights_and_i
         page.wait_for_function(
             "(selector) => document.querySelector(selector).textContent.includes('square')",
             arg=CAPTION,
+            polling=POLL_MS,
             timeout=60_000,
         )
         play_pause.click()
