@@ -82,6 +82,23 @@ def lab(tmp_path, root=None):
         server.wait(timeout=30)
 
 
+@pytest.fixture(scope="module")
+def student_lab(tmp_path_factory):
+    """One student's JupyterLab for the browser tests, as ``make lab`` starts it: the course
+    filled with the reference answers, the README beside it. Each test opens its own
+    notebooks and changes only them.
+
+    Yields:
+        The student's folder and the server's port.
+    """
+    folder = tmp_path_factory.mktemp("lab")
+    root = folder / "student"
+    student_copy(root / "course", reference_answers())
+    shutil.copy(ROOT / "README.md", root / "README.md")
+    with lab(folder, root) as port:
+        yield root, port
+
+
 def test_jupyterlab_serves_the_course_without_the_instructor_tools(tmp_path):
     with lab(tmp_path) as port:
         root = {item["name"] for item in json.loads(get(port, "/api/contents"))["content"]}
@@ -137,49 +154,45 @@ def run_all_in_the_browser(page, port, name):
             break
         except PlaywrightTimeout:
             page.keyboard.press("Escape")
-    page.wait_for_function(
-        FINISHED, arg=[PROMPTS, STDERR], polling=POLL_MS, timeout=180_000
-    )
+    page.wait_for_function(FINISHED, arg=[PROMPTS, STDERR], polling=POLL_MS, timeout=180_000)
 
 
-def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(tmp_path, browser):
+def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(student_lab, browser):
     # Notebook 07 once raised in 9 cells under Run All while every other check passed.
-    root = tmp_path / "student"
-    student_copy(root / "course", reference_answers())
-    shutil.copy(ROOT / "README.md", root / "README.md")
-    with lab(tmp_path, root) as port:
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.goto(f"http://127.0.0.1:{port}/lab?token={TOKEN}")
-        page.wait_for_selector(".jp-DirListing-item", timeout=60_000)
-        menus = page.locator(".lm-MenuBar-itemLabel").all_inner_texts()
-        assert "Nbgrader" not in menus  # no instructor tools, no assignment list
-        run_all_in_the_browser(page, port, "07_control")
-        assert page.locator(STDERR).all_inner_texts() == [], "cells of 07_control showed errors"
-        # Validate, as a student clicks it: the whole notebook, every cell, passes.
-        page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate").click()
-        dialog = page.locator(".jp-Dialog")
-        dialog.wait_for(timeout=180_000)
-        assert "Success! Your notebook passes all the tests." in dialog.inner_text()
-        dialog.get_by_role("button", name="Ok").click()
-        # What JupyterLab ran, saved as the student would save it: every cell, no error.
-        page.keyboard.press("Control+s")
-        path = root / "course" / "07_control" / "07_control.ipynb"
-        deadline = time.monotonic() + 30
-        while not any(cell.get("outputs") for cell in json.loads(path.read_text())["cells"]):
-            assert time.monotonic() < deadline, "the notebook was not saved within 30 s"
-            time.sleep(0.5)
-        code = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
-        assert [i for i, c in enumerate(code) if c["execution_count"] is None] == []
-        raised = [o["ename"] for c in code for o in c["outputs"] if o["output_type"] == "error"]
-        assert raised == []
+    root, port = student_lab
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.goto(f"http://127.0.0.1:{port}/lab?reset&token={TOKEN}")
+    page.wait_for_selector(".jp-DirListing-item", timeout=60_000)
+    menus = page.locator(".lm-MenuBar-itemLabel").all_inner_texts()
+    assert "Nbgrader" not in menus  # no instructor tools, no assignment list
+    run_all_in_the_browser(page, port, "07_control")
+    assert page.locator(STDERR).all_inner_texts() == [], "cells of 07_control showed errors"
+    # Validate, as a student clicks it: the whole notebook, every cell, passes.
+    page.locator(".jp-NotebookPanel-toolbar").get_by_text("Validate").click()
+    dialog = page.locator(".jp-Dialog")
+    dialog.wait_for(timeout=180_000)
+    assert "Success! Your notebook passes all the tests." in dialog.inner_text()
+    dialog.get_by_role("button", name="Ok").click()
+    # What JupyterLab ran, saved as the student would save it: every cell, no error.
+    page.keyboard.press("Control+s")
+    path = root / "course" / "07_control" / "07_control.ipynb"
+    deadline = time.monotonic() + 30
+    while not any(cell.get("outputs") for cell in json.loads(path.read_text())["cells"]):
+        assert time.monotonic() < deadline, "the notebook was not saved within 30 s"
+        time.sleep(0.5)
+    code = [c for c in json.loads(path.read_text())["cells"] if c["cell_type"] == "code"]
+    assert [i for i, c in enumerate(code) if c["execution_count"] is None] == []
+    raised = [o["ename"] for c in code for o in c["outputs"] if o["output_type"] == "error"]
+    assert raised == []
 
-        # Notebook 01 links the README: it opens in JupyterLab from the notebook.
-        page.goto(
-            f"http://127.0.0.1:{port}/lab/tree/course/01_getting_started/"
-            f"01_getting_started.ipynb?token={TOKEN}"
-        )
-        page.locator(".jp-RenderedMarkdown a", has_text="README").first.click()
-        page.wait_for_selector(".lm-TabBar-tabLabel:text-is('README.md')", timeout=30_000)
+    # Notebook 01 links the README: it opens in JupyterLab from the notebook.
+    page.goto(
+        f"http://127.0.0.1:{port}/lab/tree/course/01_getting_started/"
+        f"01_getting_started.ipynb?token={TOKEN}"
+    )
+    page.locator(".jp-RenderedMarkdown a", has_text="README").first.click()
+    page.wait_for_selector(".lm-TabBar-tabLabel:text-is('README.md')", timeout=30_000)
+    page.close()
 
 
 def test_validate_for_students_reports_any_cell_that_raises_not_only_the_tests(tmp_path):
@@ -219,43 +232,44 @@ WIDGETS = {
 }
 
 
-def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(tmp_path, browser):
+def test_a_student_runs_the_lab_report_notebooks_and_writes_an_answer(
+    student_lab, tmp_path, browser
+):
     # The notebooks with answers in words, as a student who finished the code meets them: Run
     # All shows no error; an answer typed into YOUR ANSWER HERE is saved into its answer cell
     # and waits for a person when the student is graded.
-    root = tmp_path / "student"
-    student_copy(root / "course", reference_answers())
+    root, port = student_lab
     typed = "My odometry ended 3.1 cm and 2 deg from the truth on the realistic robot."
-    with lab(tmp_path, root) as port:
-        for name in ("02_ros_concepts", "06_driving", "09_mission", "10_bag_analysis"):
-            # A page of its own for each notebook, as a student who opens one at a time.
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
-            try:
-                run_all_in_the_browser(page, port, name)
-            except PlaywrightTimeout:
-                page.screenshot(path=str(tmp_path / f"{name}.png"), full_page=True)
-                pytest.fail(f"Run All of {name} did not end; see {tmp_path / name}.png")
-            assert page.locator(STDERR).all_inner_texts() == [], f"cells of {name} showed errors"
-            for widget in WIDGETS.get(name, ()):  # the players and views drew their pictures
-                shown = page.locator(f"{SHOWN} {widget} img").first
-                assert shown.get_attribute("src"), f"{name} shows no picture in its {widget}"
-            if name != "10_bag_analysis":
-                page.close()
-        # Still in 10_bag_analysis: double-click the answer cell, type, render, save.
-        cell = page.locator(f"{SHOWN} .jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
-        cell.scroll_into_view_if_needed()
-        cell.dblclick()
-        editor = cell.locator(".cm-content")
-        editor.click()
-        page.keyboard.press("Control+a")
-        page.keyboard.type(typed)
-        page.keyboard.press("Shift+Enter")
-        page.keyboard.press("Control+s")
-        path = root / "course" / "10_bag_analysis" / "10_bag_analysis.ipynb"
-        deadline = time.monotonic() + 30
-        while typed not in path.read_text():
-            assert time.monotonic() < deadline, "the answer was not saved within 30 s"
-            time.sleep(0.5)
+    for name in ("02_ros_concepts", "06_driving", "09_mission", "10_bag_analysis"):
+        # A page of its own for each notebook, as a student who opens one at a time.
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        try:
+            run_all_in_the_browser(page, port, name)
+        except PlaywrightTimeout:
+            page.screenshot(path=str(tmp_path / f"{name}.png"), full_page=True)
+            pytest.fail(f"Run All of {name} did not end; see {tmp_path / name}.png")
+        assert page.locator(STDERR).all_inner_texts() == [], f"cells of {name} showed errors"
+        for widget in WIDGETS.get(name, ()):  # the players and views drew their pictures
+            shown = page.locator(f"{SHOWN} {widget} img").first
+            assert shown.get_attribute("src"), f"{name} shows no picture in its {widget}"
+        if name != "10_bag_analysis":
+            page.close()
+    # Still in 10_bag_analysis: double-click the answer cell, type, render, save.
+    cell = page.locator(f"{SHOWN} .jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
+    cell.scroll_into_view_if_needed()
+    cell.dblclick()
+    editor = cell.locator(".cm-content")
+    editor.click()
+    page.keyboard.press("Control+a")
+    page.keyboard.type(typed)
+    page.keyboard.press("Shift+Enter")
+    page.keyboard.press("Control+s")
+    path = root / "course" / "10_bag_analysis" / "10_bag_analysis.ipynb"
+    deadline = time.monotonic() + 30
+    while typed not in path.read_text():
+        assert time.monotonic() < deadline, "the answer was not saved within 30 s"
+        time.sleep(0.5)
+    page.close()
     (answer,) = [
         cell
         for cell in json.loads(path.read_text())["cells"]
@@ -281,7 +295,7 @@ CAPTION = ".duckie-player .widget-html-content"
 
 
 def test_a_student_plays_a_run_in_the_player_and_sees_the_robot_its_lights_and_its_state(
-    tmp_path, browser
+    student_lab, tmp_path, browser
 ):
     import io
 
@@ -290,7 +304,7 @@ def test_a_student_plays_a_run_in_the_player_and_sees_the_robot_its_lights_and_i
 
     from duckielib.leds import pattern_colors, pattern_named
 
-    root = tmp_path / "student"
+    root, port = student_lab
     kernel = {"name": "python3", "display_name": "Python 3", "language": "python"}
     notebook = nbformat.v4.new_notebook(metadata={"kernelspec": kernel})
     notebook.cells = [
@@ -302,28 +316,28 @@ def test_a_student_plays_a_run_in_the_player_and_sees_the_robot_its_lights_and_i
     ]
     (root / "course" / "watch").mkdir(parents=True)
     nbformat.write(notebook, root / "course" / "watch" / "watch.ipynb")
-    with lab(tmp_path, root) as port:
-        page = browser.new_page(viewport={"width": 1400, "height": 1200})
-        run_all_in_the_browser(page, port, "watch")
-        player = page.locator(f"{SHOWN} .duckie-player")
-        player.wait_for(timeout=60_000)
-        caption = page.locator(CAPTION)
-        assert caption.inner_text().startswith("t = 0.0 s")
-        play_pause = player.locator(".widget-play button").first  # ▶, then ⏸ while playing
-        play_pause.click()
-        # The square's first leg: green LEDs. Playing moves the slider; the kernel draws.
-        page.wait_for_function(
-            "(selector) => document.querySelector(selector).textContent.includes('square')",
-            arg=CAPTION,
-            polling=POLL_MS,
-            timeout=60_000,
-        )
-        play_pause.click()
-        page.wait_for_timeout(1500)  # the last frames asked for arrive
-        paused = caption.inner_text()
-        page.wait_for_timeout(1500)
-        assert caption.inner_text() == paused, "the player went on after pause"
-        shot = player.screenshot(path=str(tmp_path / "player.png"))
+    page = browser.new_page(viewport={"width": 1400, "height": 1200})
+    run_all_in_the_browser(page, port, "watch")
+    player = page.locator(f"{SHOWN} .duckie-player")
+    player.wait_for(timeout=60_000)
+    caption = page.locator(CAPTION)
+    assert caption.inner_text().startswith("t = 0.0 s")
+    play_pause = player.locator(".widget-play button").first  # ▶, then ⏸ while playing
+    play_pause.click()
+    # The square's first leg: green LEDs. Playing moves the slider; the kernel draws.
+    page.wait_for_function(
+        "(selector) => document.querySelector(selector).textContent.includes('square')",
+        arg=CAPTION,
+        polling=POLL_MS,
+        timeout=60_000,
+    )
+    play_pause.click()
+    page.wait_for_timeout(1500)  # the last frames asked for arrive
+    paused = caption.inner_text()
+    page.wait_for_timeout(1500)
+    assert caption.inner_text() == paused, "the player went on after pause"
+    shot = player.screenshot(path=str(tmp_path / "player.png"))
+    page.close()
     t, state, lights = re.fullmatch(r"t = ([\d.]+) s · state: (\S+) · LEDs: (\S+)", paused).groups()
     assert float(t) > 0
     assert state == "square"
