@@ -229,6 +229,7 @@ def drive(
     """
     command = [sys.executable, "-m", "duckielib.tools.cli", "mission", "--solution", "solution.py"]
     command += ["--mission", mission, "--out", mission, "--no-animation", "--no-figure"]
+    command += ["--stall-limit", str(limits.stall_seconds)]
     run_folder = folder / mission
     try:
         result = run(

@@ -67,6 +67,8 @@ class Limits:
         processes: processes and threads of the sandbox user (a fork bomb stops there).
         cpu_seconds: CPU time of each process.
         mission_seconds: wall time of the driving run (the mission on the virtual Duckiebot).
+        stall_seconds: wall time a node of the driving run may compute without calling rospy
+            (simulated time stands still meanwhile) before the run stops it, saying why.
         file_bytes: the largest file a process may write (its standard output too).
         output_bytes: the most the grader reads of a run's standard output and error.
         uid: the unprivileged user (and group) the code runs as. The process limit counts
@@ -80,6 +82,7 @@ class Limits:
     processes: int = 256
     cpu_seconds: int = 900
     mission_seconds: int = 180
+    stall_seconds: int = 10
     file_bytes: int = 1024**3
     output_bytes: int = 256 * 1024**2
     uid: int = NOBODY

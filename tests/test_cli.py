@@ -259,6 +259,17 @@ def test_a_negative_seed_is_refused_by_the_command_line():
     )
 
 
+@pytest.mark.parametrize("given", ["0", "-2", "soon", "inf"])
+def test_a_stall_limit_that_is_not_a_duration_is_refused(given):
+    result = duckie("mission", "--stall-limit", given)
+    assert result.returncode == 2
+    assert "Traceback" not in result.stderr
+    assert result.stderr.splitlines()[-1] == (
+        f"duckie mission: error: argument --stall-limit: give a number of seconds above 0, "
+        f"not '{given}'"
+    )
+
+
 def test_an_unknown_stop_colour_is_refused_naming_the_option_and_the_patterns():
     result = duckie("mission", "--stop-color", "PINK")
     assert result.returncode == 2

@@ -307,6 +307,10 @@ class _ThreadActor(_Actor):
             self.finished = True
 
 
+#: How many real seconds a node's code may run without calling rospy, unless a graph says.
+STALL_LIMIT_S = 10.0
+
+
 class Graph(ParameterServer):
     """An in-process ROS master with a simulated clock and a deterministic scheduler.
 
@@ -333,7 +337,7 @@ class Graph(ParameterServer):
         stderr: Optional[TextIO] = None,
         echo_logs: bool = True,
         threads: bool = False,
-        stall_limit: float = 10.0,
+        stall_limit: float = STALL_LIMIT_S,
     ) -> None:
         self.threads = threads or _greenlet is None
         self.stall_limit = stall_limit

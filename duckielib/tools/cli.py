@@ -251,6 +251,7 @@ def _mission(args: argparse.Namespace) -> int:
         stop_color=args.stop_color,
         animation=not args.no_animation,
         figure=not args.no_figure,
+        stall_limit=args.stall_limit,
     )
     print(run.text())
     return 0
@@ -322,6 +323,13 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
     )
     mission.add_argument(
         "--no-figure", action="store_true", help="skip trajectory.png (the grader draws its own)"
+    )
+    mission.add_argument(
+        "--stall-limit",
+        type=_seconds,
+        metavar="SECONDS",
+        help="real seconds a node's code may run without calling rospy before the mission "
+        "stops it (default 10)",
     )
     mission.set_defaults(handler=_mission)
 
@@ -456,6 +464,17 @@ def _seed(text: str) -> int:
         value = -1
     if value < 0:
         raise argparse.ArgumentTypeError(f"give a whole number 0 or more, not {text!r}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    """A duration from the command line: a number of seconds above 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not value > 0 or math.isinf(value):
+        raise argparse.ArgumentTypeError(f"give a number of seconds above 0, not {text!r}")
     return value
 
 

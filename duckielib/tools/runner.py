@@ -263,6 +263,7 @@ def run_mission(
     animation: bool = True,
     time_limit: float = DEFAULT_TIME_LIMIT_S,
     figure: bool = True,
+    stall_limit: Optional[float] = None,
 ) -> MissionRun:
     """Run ``mission`` on the virtual Duckiebot with ``solution`` and write its files to ``out``.
 
@@ -281,6 +282,8 @@ def run_mission(
         animation: whether to write ``mission.gif`` (it takes a few seconds).
         time_limit: simulated seconds after which an unfinished mission is stopped.
         figure: whether to draw ``trajectory.png`` (the grader draws its own, from the bag).
+        stall_limit: real seconds a node's code may run without calling rospy before the
+            mission stops it (simulated time cannot move meanwhile); None: the graph's 10 s.
 
     Returns:
         The run: its report, summary and files.
@@ -306,7 +309,7 @@ def run_mission(
     files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
     with modules_installed(replace_real=True):
         namespace, simulated, wall, failure = drive_and_record(
-            parts, chosen, noise, seed, files, time_limit
+            parts, chosen, noise, seed, files, time_limit, stall_limit
         )
     if failure is None:
         return _write_run(
@@ -373,6 +376,7 @@ def drive_and_record(
     seed: int,
     files: Dict[str, Path],
     time_limit: float,
+    stall_limit: Optional[float] = None,
 ) -> Tuple[str, float, float, Optional[DuckielibError]]:
     """Run the mission's nodes on a new virtual Duckiebot, recording the bag and the log.
 
@@ -386,11 +390,11 @@ def drive_and_record(
 
     from duckielib.bags import BagRecorder
     from duckielib.nodes import odometry_node
-    from duckielib.ros.graph import Graph, NodeCrashed
+    from duckielib.ros.graph import STALL_LIMIT_S, Graph, NodeCrashed
     from duckielib.ros.log import ERROR
     from duckielib.sim import VirtualDuckiebot
 
-    graph = Graph(echo_logs=False)
+    graph = Graph(echo_logs=False, stall_limit=stall_limit or STALL_LIMIT_S)
     bot = VirtualDuckiebot(seed=seed, noise=noise, graph=graph, start_pose=chosen.start)
     finished: List[bool] = []
 
