@@ -196,7 +196,11 @@ def _guarded_client_class():
                 changed = await self._run_hidden(GUARD_CHECK, cell_index)
                 if changed:
                     self.replaced[meta.get("grade_id", f"cell {cell_index + 1}")] = changed
-            return await super().async_execute_cell(cell, cell_index, execution_count, **kwargs)
+            try:
+                return await super().async_execute_cell(cell, cell_index, execution_count, **kwargs)
+            finally:
+                if getattr(self, "sandboxed", False):
+                    _kill_kernel_copies(getattr(self.km.provisioner, "pid", None))
 
         async def _run_hidden(self, source, index):
             """Run ``source`` in the kernel without a cell of its own; its value, if a list."""
@@ -829,8 +833,17 @@ def _is_ipykernel(command: Sequence[str]) -> bool:
     )
 
 
-def _execute(notebook: Any, folder: str, cell_seconds: int, zygote: Optional[Zygote]) -> None:
+def _execute(
+    notebook: Any,
+    folder: str,
+    cell_seconds: int,
+    zygote: Optional[Zygote],
+    sandboxed: bool = False,
+) -> None:
     """Run every cell of ``notebook`` in a new kernel working in ``folder``; note the problems.
+
+    In a sandbox of its own (``sandboxed``), the copies of the kernel a cell forked are killed
+    after the cell (:func:`_kill_kernel_copies`).
 
     The problems (a kernel that died, helpers the tests rely on that had been replaced, outputs
     cut) go into the notebook's metadata under :data:`METADATA_KEY`.
@@ -853,6 +866,7 @@ def _execute(notebook: Any, folder: str, cell_seconds: int, zygote: Optional[Zyg
         **options,
     )
     executor.replaced = {}
+    executor.sandboxed = sandboxed
     problems = []
     try:
         executor.execute()
@@ -938,6 +952,33 @@ def frame(data: bytes) -> bytes:
     return len(data).to_bytes(8, "big") + data
 
 
+def _kill_kernel_copies(kernel: Optional[int]) -> None:
+    """Kill the copies of the kernel a cell forked and left running (after each cell).
+
+    A process forked by the kernel without running another program (``os.fork()`` in a loop,
+    a ``multiprocessing`` worker) is a second kernel sharing the first one's connections: it
+    may answer the next cell's request in its place. Programs a cell started
+    (``subprocess.Popen``) are left alone until the notebook ends (:func:`_kill_strays`).
+    """
+    if kernel is None:
+        return
+    try:
+        command = Path(f"/proc/{kernel}/cmdline").read_bytes()
+    except OSError:
+        return
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit() or int(entry.name) == kernel:
+            continue
+        try:
+            if (
+                os.getpgid(int(entry.name)) == kernel
+                and (entry / "cmdline").read_bytes() == command
+            ):
+                os.kill(int(entry.name), signal.SIGKILL)
+        except (OSError, ValueError):
+            continue
+
+
 def _kill_strays(keep: Sequence[int]) -> None:
     """Kill every process of this user left in the sandbox but ``keep`` (between notebooks).
 
@@ -980,7 +1021,7 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
             message = json.loads(request)
             notebook = nbformat.reads(message["notebook"], as_version=4)
             folder = str(Path(message["folder"]).absolute())
-            _execute(notebook, folder, cell_seconds, zygote)
+            _execute(notebook, folder, cell_seconds, zygote, sandboxed)
             reply = {"notebook": nbformat.writes(notebook)}
         except Exception as error:  # the grader reports it for this notebook
             reply = {"problem": f"could not be run: {type(error).__name__}: {error}"}

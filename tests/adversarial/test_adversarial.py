@@ -217,3 +217,13 @@ def test_the_gradebook_is_intact_and_holds_every_grade(graded):
         students = [row["student"] for row in csv.DictReader(handle)]
     assert sorted(students) == sorted(CASES)
     assert json.loads((out / "skipped.json").read_text()) == []
+
+
+def test_a_fork_bomb_costs_only_its_own_cell(graded):
+    # The bomb's copies of the kernel are killed once its cell is over: the cells after it run
+    # in a kernel alone again, with room for their threads.
+    results, _, _ = graded
+    (problem,) = results["fork_bomb"].problems
+    assert problem.startswith(
+        "03_frames: 1 cell outside the tests raised: cell 3 (import os): BlockingIOError"
+    )
