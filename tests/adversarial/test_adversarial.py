@@ -221,9 +221,10 @@ def test_the_gradebook_is_intact_and_holds_every_grade(graded):
 
 def test_a_fork_bomb_costs_only_its_own_cell(graded):
     # The bomb's copies of the kernel are killed once its cell is over: the cells after it run
-    # in a kernel alone again, with room for their threads.
+    # in a kernel alone again, with room for their threads. The bomb's own cell ends at the
+    # process limit, or at the cell's time limit on a busy machine.
     results, _, _ = graded
     (problem,) = results["fork_bomb"].problems
-    assert problem.startswith(
-        "03_frames: 1 cell outside the tests raised: cell 3 (import os): BlockingIOError"
-    )
+    alone = "03_frames: 1 cell outside the tests raised: cell 3 (import os): "
+    assert problem.startswith(alone)
+    assert problem[len(alone) :].startswith(("BlockingIOError: ", "CellTimeoutError: ")), problem
