@@ -43,8 +43,10 @@ def test_a_mission_bag_replays_whole_in_rosbag_play(master, mission_bag):
     master.api.setParam("/test", "/use_sim_time", False)
     replayed = master.folder / "replayed.bag"
     recorder = master.record(replayed, sorted(counts))
+    # Played once the recorder listens to every topic: its first messages are not lost.
+    command = ["rosbag", "play", "--wait-for-subscribers", "--rate", "8", "--queue", "10000"]
     play = subprocess.run(
-        ["rosbag", "play", "--delay", "3", "--rate", "8", "--queue", "10000", str(mission_bag)],
+        [*command, str(mission_bag)],
         env=master.env,
         capture_output=True,
         text=True,
