@@ -35,7 +35,7 @@ import signal
 import sys
 import time
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, NoReturn, Optional, Sequence, Tuple
+from typing import Any, Dict, Iterator, List, Mapping, NoReturn, Optional, Sequence, Tuple
 
 NOT_RUN = "NotRun"
 #: Where the grader's findings travel back, in the notebook's metadata.
@@ -966,17 +966,19 @@ def _kill_kernel_copies(kernel: Optional[int]) -> None:
         command = Path(f"/proc/{kernel}/cmdline").read_bytes()
     except OSError:
         return
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit() or int(entry.name) == kernel:
-            continue
+    for pid, entry in _processes(keep=[kernel]):
         try:
-            if (
-                os.getpgid(int(entry.name)) == kernel
-                and (entry / "cmdline").read_bytes() == command
-            ):
-                os.kill(int(entry.name), signal.SIGKILL)
-        except (OSError, ValueError):
+            if os.getpgid(pid) == kernel and (entry / "cmdline").read_bytes() == command:
+                os.kill(pid, signal.SIGKILL)
+        except OSError:
             continue
+
+
+def _processes(keep: Sequence[int]) -> Iterator[Tuple[int, Path]]:
+    """The processes in sight (in a sandbox: its own) but ``keep``: each pid and /proc entry."""
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit() and int(entry.name) not in keep:
+            yield int(entry.name), entry
 
 
 def _kill_strays(keep: Sequence[int]) -> None:
@@ -986,13 +988,11 @@ def _kill_strays(keep: Sequence[int]) -> None:
     server); the next notebook starts among none of them, as in a sandbox of its own.
     """
     me = os.getuid()
-    for entry in Path("/proc").iterdir():
-        if not entry.name.isdigit() or int(entry.name) in keep:
-            continue
+    for pid, entry in _processes(keep):
         try:
             if entry.stat().st_uid == me:
-                os.kill(int(entry.name), signal.SIGKILL)
-        except (OSError, ValueError):
+                os.kill(pid, signal.SIGKILL)
+        except OSError:
             continue
 
 
