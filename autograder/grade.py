@@ -30,13 +30,16 @@ import io
 import json
 import logging
 import os
+import signal
 import socket
 import stat
 import tarfile
 import tempfile
+import threading
 import time
+from contextlib import contextmanager
 from pathlib import Path, PurePosixPath
-from typing import Any, Callable, Dict, List, Optional, Set, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Set, Tuple
 
 from autograder.cascade import Dependencies
 from autograder.course import (
@@ -239,6 +242,26 @@ def _grade_on_worker(
     return run_unit(task, files, course)
 
 
+@contextmanager
+def _whole_on_ctrl_c() -> Iterator[None]:
+    """Finish the block before a Ctrl-C stops the run: a student is recorded whole or not at all.
+
+    A Ctrl-C that arrives inside the block is kept and raised as ``KeyboardInterrupt`` at its
+    end. Outside the main thread, where Python cannot catch signals, the block simply runs.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    caught: List[int] = []
+    before = signal.signal(signal.SIGINT, lambda number, frame: caught.append(number))
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, before)
+    if caught:
+        raise KeyboardInterrupt
+
+
 @dataclasses.dataclass
 class _Writer:
     """The one writer of the class's results."""
@@ -253,7 +276,14 @@ class _Writer:
     rubrics: Dict[Tuple[str, str], str] = dataclasses.field(default_factory=dict)
 
     def record(self, result: StudentResult, autograded: Dict[str, str], key: str) -> None:
-        """Keep one student's result: gradebook, notebooks, feedback, JSON, the class's CSV."""
+        """Keep one student's result: gradebook, notebooks, feedback, JSON, the class's CSV.
+
+        A Ctrl-C waits until all of them are written, so the CSV and ``results/`` always agree.
+        """
+        with _whole_on_ctrl_c():
+            self._record(result, autograded, key)
+
+    def _record(self, result: StudentResult, autograded: Dict[str, str], key: str) -> None:
         for cell, most in self.cells.items():
             result.cells.setdefault(cell, (0.0, most))
         result.cells = {cell: result.cells[cell] for cell in sorted(result.cells)}

@@ -176,6 +176,24 @@ def test_ctrl_c_keeps_the_students_graded_so_far_and_the_next_run_finishes(sandb
     assert [row.split(",")[0] for row in rows[1:]] == ["ada", "ben", "cy", "dee"]
 
 
+def test_a_ctrl_c_while_a_student_is_recorded_waits_until_the_record_is_whole(tmp_path):
+    # The race CI once hit: Ctrl-C between a student's results/ file and the class's CSV.
+    from autograder.grade import _whole_on_ctrl_c
+
+    def record() -> None:
+        with _whole_on_ctrl_c():
+            (tmp_path / "results.json").write_text("{}")
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # the signal is delivered here, in the middle of the record
+            (tmp_path / "grades.csv").write_text("student\n")
+
+    before = signal.getsignal(signal.SIGINT)
+    with pytest.raises(KeyboardInterrupt):
+        record()
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["grades.csv", "results.json"]
+    assert signal.getsignal(signal.SIGINT) is before
+
+
 def test_a_unit_that_cannot_grade_says_so_and_asks_to_be_run_again(tmp_path):
     from autograder.results import from_data
     from autograder.unit import run_unit
