@@ -97,6 +97,8 @@ class NotebookRun:
         stopped: why the run ended before the last cell (the kernel died), or None.
         figures_as_text: the cells (numbers) that showed a figure as the text
             ``<Figure size ...>`` instead of a picture.
+        printed: the text each code cell showed (what it printed, and its result as text), by
+            cell number; pictures are left out.
     """
 
     name: str
@@ -106,6 +108,7 @@ class NotebookRun:
     exercises: Dict[str, int] = field(default_factory=dict)
     stopped: Optional[str] = None
     figures_as_text: List[int] = field(default_factory=list)
+    printed: Dict[int, str] = field(default_factory=dict)
 
     @property
     def stops_at(self) -> Optional[RaisedCell]:
@@ -286,6 +289,15 @@ def run_notebook(path: Union[str, Path], cell_seconds: float = CELL_SECONDS) -> 
             continue
         kind, grade_id = cell_kind(cell), cell.metadata.get("nbgrader", {}).get("grade_id")
         shown = [out.get("data", {}) for out in cell.get("outputs", []) if "data" in out]
+        text = [
+            _source({"source": out.get("text", "")})
+            if out.get("output_type") == "stream"
+            else _source({"source": out.get("data", {}).get("text/plain", "")})
+            for out in cell.get("outputs", [])
+            if out.get("output_type") in ("stream", "execute_result")
+        ]
+        if text:
+            run.printed[number] = _ANSI.sub("", "".join(text))
         if any(
             str(data.get("text/plain", "")).startswith("<Figure size") and len(data) == 1
             for data in shown

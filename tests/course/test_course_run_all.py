@@ -20,7 +20,17 @@ from __future__ import annotations
 import zipfile
 
 import pytest
-from coursetools import COURSE, NAMES, SOLUTIONS, reference_answers, student_copy, too_early
+from claims import CLAIMS, check_claim, markdown_text
+from coursetools import (
+    COURSE,
+    NAMES,
+    SOLUTIONS,
+    load,
+    notebook_path,
+    reference_answers,
+    student_copy,
+    too_early,
+)
 
 from duckielib.tools.handin import check_course, handin
 
@@ -58,6 +68,14 @@ def filled_runs(tmp_path_factory):
 def untouched_runs(tmp_path_factory):
     # A student who has not started, handing in the course as it was released.
     return handed_in(COURSE, tmp_path_factory.mktemp("run_all") / "untouched.zip")
+
+
+def claims_broken(run, folder, name):
+    """Each claim of notebook ``name`` that its text or its run no longer backs, in words."""
+    markdown = markdown_text(load(notebook_path(folder, name)))
+    printed = "\n".join(run.printed[number] for number in sorted(run.printed))
+    found = (check_claim(claim, markdown, printed) for claim in CLAIMS.get(name, []))
+    return [problem for problem in found if problem is not None]
 
 
 def raised(run):
@@ -106,3 +124,11 @@ def test_handin_says_what_is_unfinished_in_an_untouched_course(untouched_runs):
 
 def test_handin_finds_nothing_left_in_a_finished_course(filled_runs):
     assert [run.name for run in filled_runs.values() if run.unfinished or not run.clean] == []
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_each_notebooks_words_match_what_its_own_runs_print(source_runs, filled_runs, name):
+    # What a figure or a printout is said to show, it shows: in the instructors' notebook and
+    # in the release a student who finished the course runs.
+    assert claims_broken(source_runs[name], SOLUTIONS, name) == []
+    assert claims_broken(filled_runs[name], COURSE, name) == []

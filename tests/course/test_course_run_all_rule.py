@@ -45,3 +45,25 @@ def test_a_notebook_without_exercises_must_run_to_the_end():
     run.raised.clear()
     run.stopped = "the kernel died"
     assert too_early(run) == "01_getting_started: the kernel died"
+
+
+def test_a_claim_holds_only_with_its_words_and_numbers_that_back_it():
+    from claims import Claim, check_claim
+
+    claim = Claim(
+        says="The trim straightens the robot.",
+        printed=r"drift (?P<before>[-\d.]+) cm before, (?P<after>[-\d.]+) cm after",
+        holds=lambda before, after: abs(after) < 0.5 * abs(before),
+        meaning="the drift at least halves",
+    )
+    markdown = "Look at the figure.  The trim\nstraightens the robot. Then..."
+    assert check_claim(claim, markdown, "drift 3.1 cm before, 0.4 cm after\n") is None
+    broken = check_claim(claim, markdown, "drift 3.1 cm before, 2.9 cm after\n")
+    assert broken == (
+        "'The trim straightens the robot.' (the drift at least halves) does not hold: "
+        "before = 3.1, after = 2.9"
+    )
+    assert check_claim(claim, "The trim helps.", "drift 3.1 cm before, 0.4 cm after").startswith(
+        "the text no longer says 'The trim straightens the robot.'"
+    )
+    assert check_claim(claim, markdown, "no numbers").startswith("nothing printed matches")
