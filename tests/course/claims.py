@@ -58,7 +58,7 @@ def markdown_text(notebook: Mapping[str, object]) -> str:
 
 def check_claim(claim: Claim, markdown: str, printed: str) -> Optional[str]:
     """Why ``claim`` does not hold in a notebook's text and printouts, or None when it holds."""
-    if _words(claim.says) not in markdown:
+    if _words(claim.says) not in _words(markdown):
         return f"the text no longer says {claim.says!r}: update or remove its claim"
     found = re.search(claim.printed, printed)
     if found is None:
