@@ -246,3 +246,35 @@ def test_duckie_release_check_passes_on_the_committed_course():
     )
     assert result.returncode == 0, result.stdout + result.stderr
     assert "identical to a fresh release" in result.stdout
+
+
+THINK = "**Think about it** (nothing to write, not graded):"
+QUESTION = re.compile(r"^\*\*Question:\*\*", re.M)
+SECTION = re.compile(r"^#{1,3} ", re.M)
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_every_question_has_an_answer_cell_or_says_it_is_for_thinking_only(name):
+    # A student must never wonder where, or whether, to write an answer: a **Question:** has its
+    # answer cell before the next question or section; a prompt with none says so.
+    cells = load_solution_nb(name)["cells"]
+    answers = list(answer_cells(load_solution_nb(name)).values())
+    for index, cell in enumerate(cells):
+        text = source(cell)
+        if cell["cell_type"] != "markdown" or cell in answers:
+            continue
+        if QUESTION.search(text):
+            after = []
+            for later in cells[index + 1 :]:
+                ends = QUESTION.search(source(later)) or SECTION.search(source(later))
+                if ends and later["cell_type"] == "markdown" and later not in answers:
+                    break
+                after.append(later)
+            assert any(later in answers for later in after), (
+                f"{name}, cell {index + 1}: a **Question:** with no answer cell under it; give it "
+                f"one, or make it a prompt to think about: {THINK}"
+            )
+        assert "**Think about it**" not in text or THINK in text, (
+            f"{name}, cell {index + 1}: a prompt to think about starts: {THINK}"
+        )
+        assert "in a markdown cell below" not in text, f"{name}, cell {index + 1}: which cell?"
