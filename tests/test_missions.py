@@ -1,11 +1,14 @@
-"""Missions as data: the exercise's task and its D variant, checked move by move."""
+"""Missions as data: the exercise's task and its D variant, checked move by move; and the
+runner's check that a mission node leaves the wheels at rest once it is done."""
 
 from __future__ import annotations
 
 import math
+import re
 
 import pytest
 
+from duckielib.bags.behaviour import STILL_AFTER_DONE_S
 from duckielib.errors import ConfigError
 from duckielib.missions import (
     D_SHAPE,
@@ -15,6 +18,7 @@ from duckielib.missions import (
     STRAIGHT,
     TASK_START,
     Arc,
+    Mission,
     ReturnToStart,
     Rotate,
     State,
@@ -106,3 +110,84 @@ def test_states_refuse_unknown_colours_and_moves():
         State("wait", "MAUVE", (Stop(5.0),))
     with pytest.raises(ConfigError, match="is not a move"):
         State("wait", "RED", ("stop",))
+
+
+#: A student's mission node that forgets the zero command: the reference's with its arcs not
+#: settling, no stop before 'done' and no shutdown hook, as ``(old, new)`` edits of its export.
+FORGETS_THE_ZERO_COMMAND = (
+    (
+        "    rospy.on_shutdown(lambda: drive(0.0, 0.0))  "
+        "# however the node ends, the wheels stop\n",
+        "",
+    ),
+    (
+        "            drive(v, sign * v / radius)\n            rate.sleep()\n        settle()\n",
+        "            drive(v, sign * v / radius)\n            rate.sleep()\n",
+    ),
+    (
+        '    drive(0.0, 0.0)\n    announce.publish(String(data="done"))',
+        '    announce.publish(String(data="done"))',
+    ),
+)
+
+#: A short mission that ends on an arc: a wait, then a clockwise quarter circle of 0.2 m.
+QUARTER_ARC = Mission(
+    "quarter_arc",
+    (State("wait", "RED", (Stop(1.0),)), State("arc", "YELLOW", (Arc(0.2, -math.pi / 2),))),
+)
+
+
+@pytest.fixture(scope="module")
+def reference_source():
+    from autograder.course import ROOT
+    from duckielib.solution import export_solution
+
+    return export_solution(ROOT / "solutions").source
+
+
+def drive_quarter_arc(source, folder):
+    """The report of ``source`` (a solution's text) driving :data:`QUARTER_ARC`."""
+    from duckielib.solution import MISSION_PARTS, load_solution
+    from duckielib.tools.runner import run_mission
+
+    folder.mkdir(exist_ok=True)
+    path = folder / "solution.py"
+    path.write_text(source, encoding="utf-8")
+    solution = load_solution(path, required=MISSION_PARTS)
+    out = folder / "run"
+    return run_mission(solution, QUARTER_ARC, out=out, animation=False, figure=False).report
+
+
+def test_wheels_left_turning_after_done_fail_the_mission_with_the_distance(
+    reference_source, tmp_path
+):
+    forgetful = reference_source
+    for old, new in FORGETS_THE_ZERO_COMMAND:
+        assert forgetful.count(old) == 1, old
+        forgetful = forgetful.replace(old, new)
+    report = drive_quarter_arc(forgetful, tmp_path)
+    assert report.finished
+    assert report.states_in_order
+    seconds, rolled, turned = report.after_done
+    assert seconds == pytest.approx(STILL_AFTER_DONE_S, abs=0.05)
+    # The last command of the arc, MIN_SPEED 0.12 m/s along 0.2 m (0.6 rad/s), for 5 s.
+    assert rolled == pytest.approx(5 * 0.12, rel=0.05)
+    assert turned == pytest.approx(5 * 0.12 / 0.2, rel=0.1)
+    assert not report.still_after_done
+    assert not report.stops_held  # the end is a stop: the grader's stop points go too
+    assert report.as_dict()["checks"]["still_after_done"] is False
+    (said,) = [problem for problem in report.problems if "after 'done'" in problem]
+    match = re.fullmatch(
+        r"The wheels still turn after 'done': the robot rolled ([\d.]+) cm and turned (\d+)° in "
+        r"5 s; send a zero command \(v = 0, omega = 0\) before you finish\.",
+        said,
+    )
+    assert match, said
+    assert float(match[1]) == pytest.approx(100 * rolled, abs=0.05)
+
+    reference = drive_quarter_arc(reference_source, tmp_path / "reference")
+    _, rolled, turned = reference.after_done
+    assert rolled < 1e-4  # the reference stands still: under 0.1 mm, under 0.01 degree
+    assert math.degrees(turned) < 0.01
+    assert reference.still_after_done
+    assert not any("after 'done'" in problem for problem in reference.problems)

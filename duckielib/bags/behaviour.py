@@ -8,7 +8,8 @@ and the simulator's ground truth; :func:`mission_report` reads them and compares
 ``summary.json``; notebook 09 and the class grader score a student's mission with it.
 
 The checks are about behaviour, never about how the code is written: the states and colours in
-order, each stop standing still for its time, and the true end near the start.
+order, each stop standing still for its time, the robot standing still after ``"done"`` (the
+runner watches it for a few seconds more), and the true end near the start.
 """
 
 from __future__ import annotations
@@ -26,9 +27,13 @@ from duckielib.missions import Mission, Pose
 from duckielib.rostime import NS_PER_S
 
 __all__ = [
+    "AFTER_DONE_S",
     "CLOSURE_TOLERANCE_M",
+    "COAST_S",
     "DONE",
+    "STILL_AFTER_DONE_S",
     "STILL_TOLERANCE_M",
+    "STILL_TURN_TOLERANCE",
     "STOP_TOLERANCE_S",
     "MissionReport",
     "StateRun",
@@ -47,6 +52,20 @@ STILL_TOLERANCE_M = 0.01
 
 #: The true end must be this close to the start, in metres.
 CLOSURE_TOLERANCE_M = 0.10
+
+#: After ``done`` the wheels have this long to come to rest (the motors lag), in seconds.
+COAST_S = 0.5
+
+#: Then the robot must stand still this long (within :data:`STILL_TOLERANCE_M`, and turning
+#: less than :data:`STILL_TURN_TOLERANCE`), in seconds: a node that ends without a zero
+#: command leaves the wheels turning.
+STILL_AFTER_DONE_S = 5.0
+
+#: How long the runner watches the robot after the mission node returns, in seconds.
+AFTER_DONE_S = COAST_S + STILL_AFTER_DONE_S
+
+#: While it stands still after ``done`` the robot may turn this much on the spot, in radians.
+STILL_TURN_TOLERANCE = math.radians(2.0)
 
 
 @dataclass
@@ -98,6 +117,10 @@ class MissionReport:
         final_pose_odometry: the last pose of the odometry, (x, y, theta), or None.
         final_pose_truth: where the robot really was at the end, (x, y, theta), or None.
         distance_to_start: true end to the mission's start, in metres, or None.
+        after_done: how the robot really moved once ``done`` was announced and the wheels had
+            :data:`COAST_S` to come to rest: (seconds watched, at most
+            :data:`STILL_AFTER_DONE_S`; metres rolled; radians turned), or None when the bag
+            shows no ``done`` or no truth after it.
         problems: what differs from the mission, one sentence each (empty when all is well).
     """
 
@@ -109,6 +132,7 @@ class MissionReport:
     final_pose_odometry: Optional[Pose] = None
     final_pose_truth: Optional[Pose] = None
     distance_to_start: Optional[float] = None
+    after_done: Optional[Tuple[float, float, float]] = None
     problems: List[str] = field(default_factory=list)
 
     @property
@@ -118,9 +142,21 @@ class MissionReport:
         return [(run.name, run.color) for run in self.states] == expected
 
     @property
+    def still_after_done(self) -> bool:
+        """Whether the robot stood still after ``done`` (True when the bag cannot tell)."""
+        if self.after_done is None:
+            return True
+        _, rolled, turned = self.after_done
+        return rolled <= STILL_TOLERANCE_M and turned <= STILL_TURN_TOLERANCE
+
+    @property
     def stops_held(self) -> bool:
-        """Whether every stop state lasted its time (within tolerance) and stood still."""
-        if not self.states_in_order:
+        """Whether every stop held its time and stood still, and so did the end (``done``).
+
+        Each stop state must last its time (within tolerance) standing still, and after
+        ``done`` the robot must stand still too (:attr:`still_after_done`).
+        """
+        if not self.states_in_order or not self.still_after_done:
             return False
         return all(
             _stop_problem(state, run) is None
@@ -155,12 +191,19 @@ class MissionReport:
             "final_pose_odometry": _rounded(self.final_pose_odometry),
             "final_pose_truth": _rounded(self.final_pose_truth),
             "distance_to_start": _round(self.distance_to_start),
+            "after_done": None
+            if self.after_done is None
+            else {
+                key: round(value, 4)
+                for key, value in zip(("seconds", "rolled", "turned"), self.after_done)
+            },
             "odometry_error": None
             if error is None
             else {"distance": round(error[0], 4), "heading": round(error[1], 4)},
             "checks": {
                 "states_in_order": self.states_in_order,
                 "stops_held": self.stops_held,
+                "still_after_done": self.still_after_done,
                 "closed": self.closed,
             },
             "problems": list(self.problems),
@@ -228,6 +271,36 @@ def _moved(track: Optional[PoseTrack], start: float, end: float) -> float:
     if not inside.any():
         return 0.0
     return float(np.max(np.hypot(track.x[inside] - x0, track.y[inside] - y0)))
+
+
+def _after_done(track: PoseTrack, done: float) -> Optional[Tuple[float, float, float]]:
+    """(seconds watched, metres rolled, radians turned) after ``done`` and the coast (truth)."""
+    start = done + COAST_S
+    inside = (track.t > start) & (track.t <= start + STILL_AFTER_DONE_S)
+    if not inside.any():
+        return None
+    x0, y0, theta0 = _pose_at(track, start)
+    x = np.concatenate(([x0], track.x[inside]))
+    y = np.concatenate(([y0], track.y[inside]))
+    theta = np.unwrap(np.concatenate(([theta0], track.theta[inside])))
+    rolled = float(np.sum(np.hypot(np.diff(x), np.diff(y))))
+    turned = float(np.max(np.abs(theta - theta[0])))
+    return float(track.t[inside][-1]) - start, rolled, turned
+
+
+def _after_done_problem(report: MissionReport) -> str:
+    """The sentence for wheels that still turn after ``done``."""
+    assert report.after_done is not None
+    seconds, rolled, turned = report.after_done
+    moved = []
+    if rolled > STILL_TOLERANCE_M:
+        moved.append(f"rolled {100 * rolled:.1f} cm")
+    if turned > STILL_TURN_TOLERANCE:
+        moved.append(f"turned {math.degrees(turned):.0f}°")
+    return (
+        f"The wheels still turn after '{DONE}': the robot {' and '.join(moved)} in "
+        f"{round(seconds, 1):g} s; send a zero command (v = 0, omega = 0) before you finish."
+    )
 
 
 def _stop_problem(state: Any, run: StateRun) -> Optional[str]:
@@ -316,6 +389,8 @@ def mission_report(
             )
         )
     report.total_time = (end_time - t0) if announcements else 0.0
+    if done and truth is not None:
+        report.after_done = _after_done(truth, done[0])
     if odometry is not None:
         report.final_pose_odometry = _pose_at(odometry, last_time)
     if truth is not None:
@@ -348,9 +423,24 @@ def _closure_problem(report: MissionReport) -> str:
 
 def _problems(report: MissionReport) -> List[str]:
     problems: List[str] = []
-    mission = report.mission
     if not report.finished:
         problems.append(f"The mission node never announced '{DONE}' on its state topic.")
+    problems += _state_problems(report)
+    if not report.still_after_done:
+        problems.append(_after_done_problem(report))
+    if report.distance_to_start is None:
+        problems.append("The bag has no ground truth, so the end cannot be checked.")
+    elif not report.closed:
+        problems.append(_closure_problem(report))
+    if report.final_pose_odometry is None:
+        problems.append("The bag has no odometry pose (odometry_node/pose).")
+    return problems
+
+
+def _state_problems(report: MissionReport) -> List[str]:
+    """The first state out of order, or else each stop that did not hold."""
+    problems: List[str] = []
+    mission = report.mission
     expected = [(state.name, state.color) for state in mission.states]
     seen = [(run.name, run.color) for run in report.states]
     if seen != expected:
@@ -371,10 +461,4 @@ def _problems(report: MissionReport) -> List[str]:
                 problem = _stop_problem(state, run)
                 if problem:
                     problems.append(problem)
-    if report.distance_to_start is None:
-        problems.append("The bag has no ground truth, so the end cannot be checked.")
-    elif not report.closed:
-        problems.append(_closure_problem(report))
-    if report.final_pose_odometry is None:
-        problems.append("The bag has no odometry pose (odometry_node/pose).")
     return problems

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
 
-from duckielib.bags.behaviour import DONE, MissionReport, mission_report
+from duckielib.bags.behaviour import AFTER_DONE_S, DONE, MissionReport, mission_report
 from duckielib.errors import ConfigError, DuckielibError
 from duckielib.missions import Mission, mission_named
 from duckielib.solution import (
@@ -413,7 +413,9 @@ def drive_and_record(
     wall = time.perf_counter()
     try:
         ended = bot.run_until(lambda: bool(finished), time_limit)
-        bot.run(0.2)  # let the last messages arrive
+        # Once the node has returned, watch the robot a while: wheels it left turning show in
+        # the bag (the report checks that the robot stands still after 'done').
+        bot.run(AFTER_DONE_S if ended else 0.2)  # and the last messages arrive
         errors = [
             record
             for record in graph.log
