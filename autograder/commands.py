@@ -1,4 +1,4 @@
-"""The instructors' ``duckie`` commands: ``release``, ``grade``, ``formgrade`` and ``feedback``.
+"""The instructors' ``duckie`` commands: release, grade, formgrade, feedback, student-edition.
 
 ``duckie`` finds them through the entry point group ``duckie.commands`` (``pyproject.toml``), so
 ``duckielib``, which students receive, never imports ``autograder``; where ``autograder`` is not
@@ -128,8 +128,18 @@ def _feedback(args: argparse.Namespace) -> int:
     return 0
 
 
+def _student_edition(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from autograder.edition import build_edition
+
+    edition = build_edition(Path(args.out), progress=lambda line: print(line, flush=True))
+    print(edition.text())
+    return 0
+
+
 def add_commands(commands: argparse._SubParsersAction) -> None:
-    """Add the instructors' commands to ``duckie``: release, grade, formgrade, feedback."""
+    """Add the instructors' commands: release, grade, formgrade, feedback, student-edition."""
     release = commands.add_parser(
         "release", help="regenerate course/ from solutions/ with nbgrader (instructors)"
     )
@@ -184,3 +194,10 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
     )
     feedback.add_argument("out", help="the folder `duckie grade --out` wrote")
     feedback.set_defaults(handler=_feedback)
+    edition = commands.add_parser(
+        "student-edition",
+        help="write what students receive (course/, the library, robot_nodes/; nothing of "
+        "solutions/, tests/ or autograder/) as a new git repository to push for a class",
+    )
+    edition.add_argument("out", help="a new or empty folder")
+    edition.set_defaults(handler=_student_edition)
