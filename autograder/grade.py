@@ -41,7 +41,6 @@ from contextlib import contextmanager
 from pathlib import Path, PurePosixPath
 from typing import Any, Callable, Dict, Iterator, List, Optional, Set, Tuple
 
-from autograder.cascade import Dependencies
 from autograder.course import (
     ROOT,
     CourseError,
@@ -57,6 +56,7 @@ from autograder.formgrade import for_formgrader, rubrics
 from autograder.results import StudentResult, from_data, to_data, write_atomic
 from autograder.sandbox import Limits
 from autograder.unit import raised_outside_tests, run_unit
+from duckielib.solution.cascade import Dependencies
 
 __all__ = [
     "StudentResult",

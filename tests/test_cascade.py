@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import json
 import os
 from pathlib import Path
@@ -9,9 +10,9 @@ from typing import List, Optional, Tuple
 
 import pytest
 
-from autograder.cascade import Dependencies, Function
 from autograder.course import ROOT
-from duckielib.solution import MISSION_PARTS
+from duckielib.solution import MISSION_PARTS, ODOMETRY_PARTS, load_solution
+from duckielib.solution.cascade import Dependencies, Function
 
 DELTA_PHI = Function("05_odometry", "delta_phi")
 WHEEL_PAIRING = Function("05_odometry", "WheelPairing")
@@ -263,6 +264,7 @@ def test_a_loaded_solution_counts_and_a_changed_notebook_is_read_again(tmp_path)
     course = Dependencies.from_source(tmp_path)
     assert course.builds_on(("02_second", "test_with_a_variable")) == {angle_error}
     assert course.builds_on(("02_second", "test_by_default")) == {delta_phi}  # ODOMETRY_PARTS
+    assert inspect.signature(load_solution).parameters["required"].default == ODOMETRY_PARTS
     assert course.builds_on(("02_second", "test_unknown_parts")) == {delta_phi, angle_error}
     assert course.mission == {delta_phi, angle_error}
 

@@ -34,11 +34,19 @@ Cells are Python with IPython's magics (``%matplotlib``, ``!ls``, ``x = !ls``, `
 left out; a cell that is still not Python is read for names only, and a notebook that cannot
 be read is skipped (see :attr:`Dependencies.problems`).
 
+The same reading works on a student's own notebooks (``course/``, where the answer code is
+theirs and only the visible tests are left): ``duckie handin`` says which failed tests wait on
+another function, and a later notebook's ``load_solution`` runs the own tests of the parts it
+loads (:mod:`duckielib.solution.visible_tests`). It holds no answer, and it reads a statement's
+names only when a test needs them.
+
 Typical use, once per class::
 
     dependencies = Dependencies.from_source(Path("solutions"))
     messages = dependencies.explain(messages)   # {(assignment, grade_id): message}
     note = dependencies.driving_note(messages)  # or None
+
+This module imports only the standard library (it ships with the robot's copy of the package).
 """
 
 from __future__ import annotations
@@ -128,8 +136,12 @@ def _without_magics(source: str) -> str:
     return "\n".join(kept)
 
 
+@lru_cache(maxsize=4096)
 def _parse(source: str) -> Optional[ast.Module]:
-    """The cell as Python, or None if it is not Python even without its magics."""
+    """The cell as Python, or None if it is not Python even without its magics.
+
+    Kept per text (do not change the tree): a notebook saved again parses only its new cells.
+    """
     # Plain Python first: a line that starts with % may continue an expression (a modulo).
     for text in (source, _without_magics(source)):
         try:
@@ -249,20 +261,18 @@ def _uses_of_text(source: str) -> _Uses:
 
 def _library_constants() -> Dict[str, Tuple[str, ...]]:
     """The lists of part names :mod:`duckielib.solution` offers; ``""`` is the default."""
-    import inspect
-
-    from duckielib import solution
+    from duckielib.solution import contract
 
     constants = {
         name: tuple(value)
-        for name, value in vars(solution).items()
+        for name, value in vars(contract).items()
         if name.isupper()
         and isinstance(value, (tuple, list))
         and value
         and all(isinstance(item, str) for item in value)
     }
-    default = inspect.signature(solution.load_solution).parameters["required"].default
-    constants[""] = tuple(default)
+    # load_solution's default (its module runs this one's users: it is not imported here).
+    constants[""] = tuple(contract.ODOMETRY_PARTS)
     return constants
 
 
@@ -375,8 +385,8 @@ class Dependencies:
         """Work out the dependencies from a course source, once per folder and version.
 
         Args:
-            source: the course source: one folder per assignment, each with its nbgrader
-                source notebook (``solutions/``).
+            source: the course: one folder per assignment, each with its notebook (the
+                nbgrader source ``solutions/``, or a student's ``course/``).
 
         Returns:
             The dependencies; the same object again for the same folder while none of its
@@ -606,11 +616,23 @@ class _Builder:
             found |= self.functions.get(function, frozenset())
         return frozenset(found)
 
-    def _resolve(self, uses: _Uses, scope: Mapping[str, FrozenSet[Function]]) -> Set[Function]:
+    def _resolve(self, uses: _Uses, scope: Mapping[str, _Bound]) -> Set[Function]:
         found = self._loaded(uses)
         for name in uses.names:
-            found |= scope.get(name, frozenset())
+            found |= self._value(scope.get(name))
         return found
+
+    def _value(self, bound: Optional[_Bound]) -> FrozenSet[Function]:
+        """The graded functions a name is bound to (a statement's worked out once, if asked)."""
+        if bound is None:
+            return frozenset()
+        if isinstance(bound, _Pending):
+            if bound.value is None:
+                bound.value = frozenset(
+                    self._resolve(_uses(bound.statement, self.constants), bound.scope)
+                )
+            return bound.value
+        return bound
 
     def _read_tests(
         self,
@@ -619,7 +641,7 @@ class _Builder:
         own_tests: Dict[Function, List[TestId]],
     ) -> None:
         """Add a notebook's tests: what each builds on, and whose own test it is."""
-        scope: Dict[str, FrozenSet[Function]] = {}
+        scope: Dict[str, _Bound] = {}
         named_before: Set[Function] = set()
         for cell in notebook.cells:
             if cell.kind == "test":
@@ -632,39 +654,53 @@ class _Builder:
                 named = {
                     Function(notebook.assignment, name)
                     for name in uses.names
-                    if Function(notebook.assignment, name) in scope.get(name, frozenset())
+                    if Function(notebook.assignment, name) in self._value(scope.get(name))
                 }
                 for function in sorted((named - named_before) or named):
                     own_tests.setdefault(function, []).append(test)
                 named_before |= named
-            for name, bound in _bindings(cell, notebook.assignment, self.constants):
-                if isinstance(bound, _Uses):
-                    scope[name] = frozenset(self._resolve(bound, scope))
+            for name, bound in _bindings(cell, notebook.assignment):
+                if isinstance(bound, ast.AST):
+                    # Worked out only if a test needs it: most statements are no test's concern.
+                    scope[name] = _Pending(bound, dict(scope))
                 else:
                     scope[name] = bound
 
 
+@dataclass
+class _Pending:
+    """A name bound by a statement, to resolve against the names bound before it."""
+
+    statement: ast.AST
+    scope: Dict[str, _Bound]
+    value: Optional[FrozenSet[Function]] = None
+
+
+#: What a name of a notebook is bound to: graded functions, or a statement to work out.
+_Bound = Union[FrozenSet[Function], _Pending]
+
+
 def _bindings(
-    cell: _Cell, assignment: str, constants: Mapping[str, Tuple[str, ...]]
-) -> List[Tuple[str, Union[FrozenSet[Function], _Uses]]]:
+    cell: _Cell, assignment: str
+) -> List[Tuple[str, Union[FrozenSet[Function], ast.stmt]]]:
     """What a cell binds for the cells after it, in order.
 
     Each name comes with the graded function it is (an answer cell's definition), nothing (an
-    import: the library's), or the uses of the statement that binds it (a helper or a
-    variable), to resolve against the names bound before it.
+    import: the library's), or the statement that binds it (a helper or a variable), whose
+    uses resolve against the names bound before it.
     """
     if cell.tree is None:
         if cell.kind != "answer":
             return []
         return [(name, frozenset({Function(assignment, name)})) for name, _ in _definitions(cell)]
-    bindings: List[Tuple[str, Union[FrozenSet[Function], _Uses]]] = []
+    bindings: List[Tuple[str, Union[FrozenSet[Function], ast.stmt]]] = []
     for statement in cell.tree.body:
-        value: Union[FrozenSet[Function], _Uses]
+        value: Union[FrozenSet[Function], ast.stmt]
         if cell.kind == "answer" and isinstance(statement, _DEFINITIONS):
             value = frozenset({Function(assignment, statement.name)})
         elif isinstance(statement, (ast.Import, ast.ImportFrom)):
             value = frozenset()
         else:
-            value = _uses(statement, constants)
+            value = statement
         bindings.extend((name, value) for name in _statement_bindings(statement))
     return bindings
