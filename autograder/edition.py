@@ -13,7 +13,7 @@ commit, holding:
     pyproject.toml   the library's package without the instructors' parts: no autograder,
                      no instructors' commands, no grading or test dependencies
     Makefile         the students' targets: venv, lab, run, robot, ros
-    README.md        the students' quick start, then the README's sections for students
+    README.md        a short introduction, then the README's sections for students
     .gitignore       what runs and the environment write
 
 and nothing of ``solutions/``, ``tests/``, ``autograder/``, a gradebook or the instructors'
@@ -187,18 +187,9 @@ messages, services, bags), frames, differential-drive kinematics and odometry, w
 auto-graded exercises, a 2D physics simulator of the robot, and ROS nodes that run your own
 code on a real Duckiebot.
 
-This is the course's student edition, made by your instructor:
-
-- `course/`: the notebooks, a folder each, from `@FIRST@` (start there) to
-  `@LAST@`;
-- `duckielib/`: the course's library: the simulator, rospy on an in-process graph, bags,
-  plots and the `duckie` command;
-- `robot_nodes/`: the Duckietown project that runs your code on a real Duckiebot (notebook 11);
-- `Makefile`: `make lab`, `make run`, `make robot`, `make ros`. The first `make` creates
-  `.venv/` and installs the library (a few minutes; Python 3.11 or newer).
-
-The reference solutions and the hidden tests stay with your instructor: every command that
-runs a solution runs yours (`--solution course`, your notebooks).
+This folder is the course's student edition, made by your instructor: the notebooks in
+`course/`, from `@FIRST@` to `@LAST@`, the course's library in
+`duckielib/`, and the robot's Duckietown project in `robot_nodes/`.
 
 """
 
