@@ -79,7 +79,7 @@ INSTRUCTOR_PACKAGES = ("bubblewrap", "chromium")
 #: The edition's commit: the same for the same repository.
 AUTHOR = ("Duckiebot course", "course@duckietown.invalid")
 #: The date when neither ``SOURCE_DATE_EPOCH`` nor the repository's history gives one.
-FALLBACK_EPOCH = 315532800  # 1980-01-01, the oldest date a zip file can hold
+FALLBACK_EPOCH = 315532800  # 1980-01-01
 
 #: What is never copied when the repository is not a git repository: caches by name, and by
 #: path what ``duckie robot prepare`` and running the notebooks write.
@@ -303,9 +303,10 @@ def build_edition(
         written = _write(staging, root, notebooks)
         found = leaks(staging)
         if found:
+            more = f" (and {len(found) - 1} more)" if len(found) > 1 else ""
             raise EditionError(
-                f"The edition would give answers away, so nothing was written: {found[0]}"
-                + (f" ({len(found) - 1} more)" if len(found) > 1 else "")
+                "The edition would give answers away, so nothing was written: "
+                f"{found[0].rstrip('.')}{more}."
             )
         commit = _commit(staging, written, root)
         if out.is_dir():
