@@ -14,6 +14,7 @@ from duckielib.leds import pattern_colors, pattern_named
 from duckielib.messages import Pose2DStamped, String
 from duckielib.missions import SQUARE_THEN_CIRCLE
 from duckielib.plots import ImageView, Recording, RunPlayer
+from duckielib.plots.player import _DPI
 from duckielib.sim import VirtualDuckiebot
 from duckielib.sim.world import World
 
@@ -24,6 +25,12 @@ def pixels_near(image: np.ndarray, rgb, tolerance: int = 20) -> int:
     """How many pixels of ``image`` are within ``tolerance`` of ``rgb`` in every channel."""
     difference = np.abs(image[:, :, :3].astype(int) - np.asarray(rgb, dtype=int))
     return int(np.all(difference <= tolerance, axis=2).sum())
+
+
+def mat_and_panel(frame: np.ndarray):
+    """A frame's mat (left) and the panel beside it (time, state, LED swatches, legend)."""
+    edge = int(0.6 * frame.shape[1])
+    return frame[:, :edge], frame[:, edge:]
 
 
 def led_rgb(name: str) -> np.ndarray:
@@ -61,14 +68,13 @@ def test_a_frame_shows_the_robot_its_led_colour_and_its_state(mission_player):
     start, end = recording.states[1][0], recording.states[2][0]
     index = int(np.argmin(np.abs(mission_player.times - (start + end) / 2)))
     frame = mission_player.frame(index)
-    height, width, _ = frame.shape
-    assert width >= 800
-    assert height >= 800
+    assert frame.shape == (460, 800, 3)  # wider than tall: it fits a laptop's screen
     color = SQUARE_THEN_CIRCLE.states[1].color
-    # Five LED swatches above the mat and five LEDs on the robot, in the state's colour.
-    assert pixels_near(frame[: height // 10], led_rgb(color)) > 2000
-    assert pixels_near(frame[height // 10 :], led_rgb(color)) > 20
-    assert pixels_near(frame, CHASSIS, tolerance=8) > 1000  # the yellow chassis, to scale
+    # Five LED swatches beside the mat and five LEDs on the robot, in the state's colour.
+    mat, panel = mat_and_panel(frame)
+    assert pixels_near(panel, led_rgb(color)) > 2000
+    assert pixels_near(mat, led_rgb(color)) > 10
+    assert pixels_near(mat, CHASSIS, tolerance=8) > 300  # the yellow chassis, to scale
     caption = mission_player.caption(index)
     assert f"state: square · LEDs: {color}" in caption
     assert mission_player.png(index)[:8] == b"\x89PNG\r\n\x1a\n"
@@ -86,8 +92,13 @@ def test_the_player_shows_itself_in_a_notebook_as_a_widget_with_a_picture(missio
     assert "application/vnd.jupyter.widget-view+json" in bundle
     assert bundle["image/png"][:4] == b"\x89PNG"
     box = mission_player.widget()
-    image, controls = box.children
+    # On a laptop's screen (1366 by 768: about 650 pixels of page, 530 of them the notebook's)
+    # the play button and the whole picture show together: the controls come first, above a
+    # picture shown at its own size, 460 pixels tall.
+    controls, image = box.children
     play, slider, caption = controls.children
+    assert mission_player._frame.figure.get_size_inches() * _DPI == pytest.approx((800, 460))
+    assert (image.layout.width, image.layout.max_width) == ("800px", "100%")
     assert (play.max, slider.max) == (len(mission_player) - 1, len(mission_player) - 1)
     before = image.value
     slider.value = len(mission_player) // 2  # what moving the slider (or playing) does
@@ -105,10 +116,10 @@ def test_a_simulator_run_plays_with_its_lights_and_an_odometry_ghost():
     poses = bot.sim.trace.poses() + np.array([0.05, 0.0, 0.0])  # odometry 5 cm off
     player = RunPlayer(bot, odometry=poses)
     frame = player.frame(len(player) - 1)
-    assert pixels_near(frame[: frame.shape[0] // 10], led_rgb("RED")) > 2000
+    assert pixels_near(mat_and_panel(frame)[1], led_rgb("RED")) > 2000
     assert "state: (none announced) · LEDs: RED" in player.caption(len(player) - 1)
     ghost = (0xFF, 0x9D, 0x2E)
-    assert pixels_near(frame, ghost, 10) > 200
+    assert pixels_near(frame, ghost, 10) > 100
 
 
 def test_a_bag_with_the_camera_shows_its_latest_frame_beside_the_mat(tmp_path):
@@ -204,7 +215,7 @@ def test_the_image_view_plays_a_bags_frames(tmp_path):
     with BagRecorder(tmp_path / "camera.bag", [topic], graph=bot.graph):
         bot.run(0.5)
     box = ImageView.from_bag(tmp_path / "camera.bag")
-    image, (play, slider, caption) = box.children[0], box.children[1].children
+    (play, slider, caption), image = box.children[0].children, box.children[1]
     frames = Bag(tmp_path / "camera.bag").read(topic)
     assert play.max == len(frames) - 1
     slider.value = 3

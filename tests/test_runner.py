@@ -150,12 +150,12 @@ def test_the_realistic_robot_reports_its_figures(reference, tmp_path):
 
 
 def strip_colors(frame, colors, tolerance=24, least=1500):
-    """The names of ``colors`` ({name: rgb}) that fill the LED strip above the mat in ``frame``."""
-    top = frame[: frame.shape[0] // 10].astype(int)
+    """The names of ``colors`` ({name: rgb}) that fill the LED strip beside the mat in ``frame``."""
+    panel = frame[:, int(0.6 * frame.shape[1]) :].astype(int)
     return [
         name
         for name, rgb in colors.items()
-        if np.all(np.abs(top - rgb) <= tolerance, axis=2).sum() >= least
+        if np.all(np.abs(panel - rgb) <= tolerance, axis=2).sum() >= least
     ]
 
 

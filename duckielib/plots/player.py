@@ -10,10 +10,12 @@
 
 A frame shows the mat with its tiles, the robot drawn to scale at its true pose with its five
 LEDs in the colours they showed, the true path so far (solid) and odometry's path so far
-(dashed) with a dashed outline of the robot where odometry believes it is, the time, the
-mission's state and its LEDs, and the camera's latest frame beside the mat when the
-recording has one. Where there is no ground truth (a real robot's bag), the robot is drawn
-where odometry puts it.
+(dashed) with a dashed outline of the robot where odometry believes it is; beside the mat, the
+time, the mission's state, its LEDs and the legend; and the camera's latest frame beside them
+when the recording has one. Where there is no ground truth (a real robot's bag), the robot is
+drawn where odometry puts it. A frame is wider than tall (800 by 460 pixels without the
+camera), and the notebook's player puts its controls above it: on a laptop's screen the play
+button and the whole mat are in view together.
 
 Like every module of :mod:`duckielib.plots`, it runs on the laptop only.
 """
@@ -48,11 +50,15 @@ __all__ = ["Recording", "RunPlayer"]
 RGB = Tuple[float, float, float]
 Poses = np.ndarray
 
-#: Frames are this many pixels wide at least (the mat alone; with the camera, wider).
+#: Frames are this many pixels wide at least (the mat and its panel; with the camera, wider).
 FRAME_WIDTH = 800
+#: Frames are this many pixels tall: with the player's controls, within a laptop's screen.
+FRAME_HEIGHT = 460
 _DPI = 100
 #: With the camera beside the mat, the figure is this many times wider.
 _CAMERA_SCALE = 1.75
+#: Where the panel beside the mat starts, as a fraction of the width without the camera.
+_PANEL_LEFT = 0.62
 _TRUE_COLOR = "#1f9bff"
 _ODOMETRY_COLOR = "#ff9d2e"
 _IMAGE_TYPE = "sensor_msgs/CompressedImage"
@@ -297,54 +303,62 @@ class _Frame:
         self._canvas: Any = None
         self._still: Any = None
         camera = bool(recording.frames)
-        # With the camera, the figure is wider and the mat keeps its share: figure fractions
-        # along x are divided by ``scale``.
+        # With the camera, the figure is wider and the mat and its panel keep their share:
+        # figure fractions along x are divided by ``scale``.
         scale = _CAMERA_SCALE if camera else 1.0
-        width = FRAME_WIDTH * scale / _DPI
-        self.figure = NotebookFigure(figsize=(width, 8.8), dpi=_DPI)
-        left = self.figure.add_axes((0.08 / scale, 0.1, 0.9 / scale, 0.8))
-        self.mat = left
-        self._draw_mat(left)
+        self.figure = NotebookFigure(
+            figsize=(FRAME_WIDTH * scale / _DPI, FRAME_HEIGHT / _DPI), dpi=_DPI
+        )
+        # The mat on the left, as tall as the frame allows (room below for the x axis).
+        mat = self.figure.add_axes((0.075 / scale, 0.1, 0.53 / scale, 0.885))
+        self.mat = mat
+        self._draw_mat(mat)
         truth = len(recording.truth) > 0
-        (self.true_line,) = left.plot(
+        (self.true_line,) = mat.plot(
             [], [], color=_TRUE_COLOR, linewidth=2.5, label="true path", zorder=3
         )
-        (self.odometry_line,) = left.plot(
+        (self.odometry_line,) = mat.plot(
             [],
             [],
             color=_ODOMETRY_COLOR,
             linewidth=2,
             linestyle="--",
             zorder=3,
-            label="odometry (dashed robot: where it believes it is)"
+            label="odometry\n(dashed robot: where it believes it is)"
             if truth
-            else "odometry (no ground truth: the robot is drawn where odometry puts it)",
+            else "odometry\n(no ground truth: the robot is\ndrawn where odometry puts it)",
         )
         if not truth:
             self.true_line.set_label("_nolegend_")
-        self.ghost = RobotArtist(left, recording.config, ghost=True, color=_ODOMETRY_COLOR)
-        self.robot = RobotArtist(left, recording.config)
-        if len(recording.truth) or len(recording.odometry):
-            left.legend(
-                loc="upper center", bbox_to_anchor=(0.5, -0.06), ncol=2, fontsize=9, frameon=False
-            )
+        self.ghost = RobotArtist(mat, recording.config, ghost=True, color=_ODOMETRY_COLOR)
+        self.robot = RobotArtist(mat, recording.config)
+        # The panel beside the mat: the time, the state, the LEDs, the run's title, the legend.
+        left = _PANEL_LEFT / scale
         self.time_text = self.figure.text(
-            0.02, 0.955, "", fontsize=15, family="monospace", va="center"
+            left, 0.9, "", fontsize=15, family="monospace", va="center"
         )
         self.state_text = self.figure.text(
-            0.2 / scale,
-            0.955,
+            left + 0.004 / scale,
+            0.77,
             "",
             fontsize=15,
             weight="bold",
             va="center",
             bbox={"boxstyle": "round,pad=0.3", "facecolor": "white", "edgecolor": "#444444"},
         )
-        self.led_swatches = self._draw_led_strip(scale)
-        self.figure.text(0.02, 0.915, recording.title, fontsize=10, color="#555555", va="center")
+        self.led_swatches = self._draw_led_strip(left, scale)
+        self.figure.text(left, 0.52, recording.title, fontsize=10, color="#555555", va="center")
+        if len(recording.truth) or len(recording.odometry):
+            mat.legend(
+                loc="lower left",
+                bbox_to_anchor=(left - 0.01 / scale, 0.1),
+                bbox_transform=self.figure.transFigure,
+                fontsize=9,
+                frameon=False,
+            )
         self.camera_image = None
         if camera:
-            ax = self.figure.add_axes((1.0 / scale, 0.25, 0.7 / scale, 0.5))
+            ax = self.figure.add_axes((1.0 / scale, 0.1, 0.72 / scale, 0.8))
             ax.set_title(f"camera: {recording.camera_topic}", fontsize=10)
             ax.axis("off")
             self.camera_image = ax.imshow(np.zeros((480, 640, 3), dtype=np.uint8))
@@ -369,16 +383,16 @@ class _Frame:
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
 
-    def _draw_led_strip(self, scale: float) -> List[Any]:
+    def _draw_led_strip(self, left: float, scale: float) -> List[Any]:
         from matplotlib.patches import Ellipse
 
         width, height = self.figure.get_size_inches()
-        self.figure.text(0.66 / scale, 0.955, "LEDs", fontsize=12, va="center", ha="right")
+        self.figure.text(left, 0.64, "LEDs", fontsize=12, va="center")
         swatches = []
         for index in range(led_tables.LED_COUNT):
-            # Round on screen: the figure is taller than wide, so the height is scaled down.
+            # Round on screen: the figure is wider than tall, so the height is scaled up.
             swatch = Ellipse(
-                ((0.69 + 0.06 * index) / scale, 0.955),
+                (left + (0.1 + 0.052 * index) / scale, 0.64),
                 0.044 / scale,
                 0.044 / scale * width / height,
                 transform=self.figure.transFigure,
@@ -614,6 +628,9 @@ def playing_widget(
 ) -> Any:
     """An ipywidgets box that plays ``count`` pictures: play/pause, a slider and a caption.
 
+    The controls are above the picture, and the picture is shown at its own size (smaller in a
+    narrower page), so that the play button and the whole picture fit on a laptop's screen.
+
     Args:
         count: how many pictures.
         fps: pictures per second when playing.
@@ -624,7 +641,14 @@ def playing_widget(
 
     last = count - 1
     data, kind = picture(0)
-    image = widgets.Image(value=data, format=kind, layout=widgets.Layout(max_width="100%"))
+    width = _pixel_width(data)
+    image = widgets.Image(
+        value=data,
+        format=kind,
+        layout=widgets.Layout(
+            width=f"{width}px" if width else "auto", max_width="100%", height="auto"
+        ),
+    )
     play = widgets.Play(min=0, max=last, step=1, interval=round(1000 / fps), description="Play")
     slider = widgets.IntSlider(min=0, max=last, readout=False, layout=widgets.Layout(width="45%"))
     text = widgets.HTML(value=caption(0))
@@ -636,6 +660,17 @@ def playing_widget(
         text.value = caption(index)
 
     slider.observe(show, names="value")
-    box = widgets.VBox([image, widgets.HBox([play, slider, text])])
+    box = widgets.VBox([widgets.HBox([play, slider, text]), image])
     box.add_class("duckie-player")
     return box
+
+
+def _pixel_width(data: bytes) -> int:
+    """How many pixels wide a PNG or JPEG picture is (0 if it cannot be read)."""
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(data)) as picture:
+            return int(picture.width)
+    except (OSError, ValueError):
+        return 0
