@@ -268,6 +268,13 @@ _LAPS_05 = (
 
 CLAIMS["05_odometry"] = [
     Claim(
+        says="The counts are large and differ between the wheels",
+        printed=r"time \(s\)\s+wheel\s+ticks\s+[\d.]+\s+(?:left|right)\s+(?P<first>\d+)\s+"
+        r"[\d.]+\s+(?:left|right)\s+(?P<second>\d+)",
+        holds=lambda first, second: min(first, second) > 1000 and abs(first - second) > 1000,
+        meaning="the first readings are counts in the thousands, far apart",
+    ),
+    Claim(
         says="the count goes **up** while the robot drives forward and **down** while it drives "
         "backwards",
         printed=_encoder_counts_05("left") + r"\s+" + _encoder_counts_05("right"),
