@@ -381,12 +381,14 @@ class Dependencies:
     problems: Tuple[str, ...] = ()
 
     @classmethod
-    def from_source(cls, source: Union[str, Path]) -> Dependencies:
+    def from_source(cls, source: Union[str, Path], through: Optional[str] = None) -> Dependencies:
         """Work out the dependencies from a course source, once per folder and version.
 
         Args:
             source: the course: one folder per assignment, each with its notebook (the
                 nbgrader source ``solutions/``, or a student's ``course/``).
+            through: only the assignments up to this one, included (what a notebook builds
+                on); None: all.
 
         Returns:
             The dependencies; the same object again for the same folder while none of its
@@ -394,13 +396,13 @@ class Dependencies:
         """
         folder = Path(source).resolve()
         stamps = []
-        for path in sorted(folder.glob("*/*.ipynb")):
+        for path in _notebook_paths(folder, through):
             try:
                 stat = path.stat()
             except OSError:
                 continue
             stamps.append((path.relative_to(folder).as_posix(), stat.st_mtime_ns, stat.st_size))
-        return _build(folder, tuple(stamps))
+        return _build(folder, through, tuple(stamps))
 
     def own_functions(self, test: TestId) -> FrozenSet[Function]:
         """The graded functions a test is the own test of."""
@@ -511,20 +513,31 @@ class Dependencies:
 
 
 @lru_cache(maxsize=8)
-def _build(folder: Path, stamps: Tuple[Tuple[str, int, int], ...]) -> Dependencies:
+def _build(
+    folder: Path, through: Optional[str], stamps: Tuple[Tuple[str, int, int], ...]
+) -> Dependencies:
     """The dependencies of the course source ``folder`` (``stamps`` only keys the cache)."""
     del stamps
-    return _Builder(folder).build()
+    return _Builder(folder, through).build()
+
+
+def _notebook_paths(folder: Path, through: Optional[str]) -> List[Path]:
+    """The notebooks of a course folder in course order, up to ``through`` if given."""
+    return [
+        path
+        for path in sorted(folder.glob("*/*.ipynb"))
+        if through is None or path.parent.name <= through
+    ]
 
 
 class _Builder:
     """Works the dependencies of one course source out, notebook by notebook."""
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, through: Optional[str] = None) -> None:
         self.constants = _library_constants()
         self.notebooks: List[_Notebook] = []
         self.problems: List[str] = []
-        for path in sorted(folder.glob("*/*.ipynb")):
+        for path in _notebook_paths(folder, through):
             try:
                 self.notebooks.append(_read_notebook(path))
             except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:

@@ -20,7 +20,7 @@ import textwrap
 import traceback
 import types
 from pathlib import Path
-from typing import Any, Callable, Iterable, List, Mapping, Tuple, Union
+from typing import Any, Callable, Iterable, List, Mapping, Optional, Tuple, Union
 
 from duckielib.solution.contract import (
     CONTRACT,
@@ -116,7 +116,9 @@ def _unfinished_in_module(source: str) -> List[str]:
 
 
 def load_solution(
-    path: Union[str, os.PathLike[str], None] = None, required: Iterable[str] = ODOMETRY_PARTS
+    path: Union[str, os.PathLike[str], None] = None,
+    required: Iterable[str] = ODOMETRY_PARTS,
+    visible_tests: Optional[bool] = None,
 ) -> types.ModuleType:
     """Load a solution: an exported module, or a folder of notebooks exported on the fly.
 
@@ -125,15 +127,23 @@ def load_solution(
             names), or a folder of notebooks; ``None`` for the reference solution.
         required: the parts the caller needs; each must be present, written and shaped as in
             :data:`CONTRACT`.
+        visible_tests: for a folder of notebooks, whether the visible tests of the required
+            parts, and of the parts they build on, must pass first (run from the folder's own
+            notebooks, see :mod:`duckielib.solution.visible_tests`). None: when a notebook of
+            that folder loads it, as ``load_solution("..", ...)`` does in a later notebook
+            (the working folder is one of the folder's notebook folders), and only for the
+            notebooks before that one.
 
     Returns:
         The solution as a module; its parts are attributes.
 
     Raises:
-        SolutionError: if the solution cannot be read or imported, or a required part is
-            missing, unfinished or has other parameters (the message names the notebook).
+        SolutionError: if the solution cannot be read or imported, a required part is
+            missing, unfinished or has other parameters, or fails a visible test of its
+            notebook (the message names the notebook).
     """
     folder = reference_solution_dir() if path is None else Path(path)
+    found: Optional[Mapping[str, str]] = None  # of a folder: each part's notebook
     if folder.is_dir():
         export = export_solution(folder, strict=False)
         for name in required:
@@ -142,6 +152,7 @@ def load_solution(
                 raise SolutionError(export.broken[notebook])
         _refuse_unfinished(required, export.unfinished)
         module = _module_from_source(export.source, f"<solution exported from {folder}>")
+        found = export.found
     elif folder.is_file():
         if folder.suffix == ".ipynb":
             raise SolutionError(
@@ -154,7 +165,48 @@ def load_solution(
         raise SolutionError(f"There is no solution file or folder {folder}.")
     for name in required:
         check_part(module, name, where=str(folder))
+    if found is not None:
+        loading_notebook = _loading_notebook(folder)
+        if visible_tests or (visible_tests is None and loading_notebook is not None):
+            _refuse_failing(folder, module, required, found, loading_notebook)
     return module
+
+
+def _loading_notebook(folder: Path) -> Optional[str]:
+    """The notebook of ``folder`` the process works in (``NN_name/NN_name.ipynb``), or None.
+
+    A notebook's kernel works in the notebook's folder: a later notebook loading ``..``.
+    """
+    try:
+        here = Path.cwd().resolve()
+        if here.parent != folder.resolve() or not (here / f"{here.name}.ipynb").is_file():
+            return None
+    except OSError:
+        return None
+    return here.name
+
+
+def _refuse_failing(
+    folder: Path,
+    module: types.ModuleType,
+    required: Iterable[str],
+    found: Mapping[str, str],
+    loading_notebook: Optional[str],
+) -> None:
+    """Stop at the first required part (or part it builds on) failing a visible test."""
+    # Only for a folder of notebooks: on the robot a solution is a file.
+    from duckielib.solution.visible_tests import checking, first_failing_test
+
+    if checking():
+        return  # a load inside the tests being run: the outer load checks
+    parts = {
+        name: Path(found[name]).parent.name or CONTRACT[name].notebook
+        for name in required
+        if name in found
+    }
+    failed = first_failing_test(folder, module, parts, before=loading_notebook)
+    if failed is not None:
+        raise SolutionError(failed.sentence())
 
 
 def check_part(solution: Any, name: str, where: str = "the solution") -> Any:

@@ -18,7 +18,7 @@ import time
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Union
+from typing import Any, Callable, Dict, Iterable, List, Optional, Sequence, Tuple, Union
 
 from duckielib.errors import DuckielibError
 
@@ -36,6 +36,7 @@ __all__ = [
     "handin_notebooks",
     "raised_cells",
     "run_notebook",
+    "waiting_tests",
 ]
 
 #: How long one cell may run before it is interrupted, in seconds.
@@ -99,6 +100,10 @@ class NotebookRun:
             ``<Figure size ...>`` instead of a picture.
         printed: the text each code cell showed (what it printed, and its result as text), by
             cell number; pictures are left out.
+        waits: each failed test that fails only because a function it builds on fails (of
+            this notebook, or of an earlier one the notebook loads), by ``grade_id``, with those
+            functions: ``"delta_phi"``, or ``"05_odometry: delta_phi"`` for another notebook's
+            (:func:`waiting_tests`).
     """
 
     name: str
@@ -109,6 +114,7 @@ class NotebookRun:
     stopped: Optional[str] = None
     figures_as_text: List[int] = field(default_factory=list)
     printed: Dict[int, str] = field(default_factory=dict)
+    waits: Dict[str, List[str]] = field(default_factory=dict)
 
     @property
     def stops_at(self) -> Optional[RaisedCell]:
@@ -127,12 +133,48 @@ class NotebookRun:
 
     @property
     def unfinished(self) -> List[str]:
-        """The exercises whose visible test fails (a test of no single exercise by its name)."""
+        """The exercises whose visible test fails on its own (a test of no exercise: its name).
+
+        A test that fails only because another function fails is in :attr:`waiting` instead.
+        """
         found = []
         for grade_id in self.failed_tests:
-            name = grade_id.removeprefix("test_")
-            found.append(name if name in self.exercises else grade_id)
+            if grade_id not in self.waits:
+                found.append(self._exercise(grade_id))
         return found
+
+    @property
+    def waiting(self) -> Dict[str, List[str]]:
+        """The exercises whose visible tests fail only because of another function, with it."""
+        found: Dict[str, List[str]] = {}
+        for grade_id, functions in self.waits.items():
+            name = self._exercise(grade_id)
+            if name not in self.unfinished:
+                found.setdefault(name, [])
+                found[name] += [function for function in functions if function not in found[name]]
+        return found
+
+    def _exercise(self, grade_id: str) -> str:
+        name = grade_id.removeprefix("test_")
+        return name if name in self.exercises else grade_id
+
+    def _todo(self) -> str:
+        """``to do: delta_phi; WheelPairing waits on it``: what to write or fix, and what waits."""
+        todo = self.unfinished
+        groups: Dict[Tuple[str, ...], List[str]] = {}
+        for name, functions in self.waiting.items():
+            groups.setdefault(tuple(functions), []).append(name)
+        parts = [f"to do: {', '.join(todo)}"] if todo else []
+        if not todo and len(groups) == 1:
+            parts.append(f"waits on {_listed(next(iter(groups)))}")
+        else:
+            for causes, names in groups.items():
+                verb = "waits" if len(names) == 1 else "wait"
+                on = _listed(causes)
+                if list(causes) == todo:
+                    on = "it" if len(todo) == 1 else "them"
+                parts.append(f"{_listed(names)} {verb} on {on}")
+        return "; ".join(parts)
 
     def summary(self) -> str:
         """One line for a person: the tests, and where Run All stops."""
@@ -140,8 +182,8 @@ class NotebookRun:
         text = f"{self.name}: "
         if self.tests:
             text += f"{passed} of {len(self.tests)} visible tests pass"
-            if self.unfinished:
-                text += f" (to do: {', '.join(self.unfinished)})"
+            if self.failed_tests:
+                text += f" ({self._todo()})"
         else:
             text += "no graded test"
         if self.stopped:
@@ -149,6 +191,70 @@ class NotebookRun:
         if self.clean:
             return f"{text}; Run All runs to the end ({self.seconds:.0f} s)"
         return f"{text}; Run All stops at {self.stops_at.describe()}"  # type: ignore[union-attr]
+
+
+def _listed(words: Sequence[str]) -> str:
+    """``a``, ``a and b``, ``a, b and c``."""
+    return words[0] if len(words) == 1 else f"{', '.join(words[:-1])} and {words[-1]}"
+
+
+#: The sentences of :func:`~duckielib.solution.load_solution` that send the student to an
+#: earlier notebook: its name, then the functions (the first of them at least).
+_EARLIER = re.compile(
+    r"SolutionError: (?:Fix|Finish) notebook (?P<notebook>\w+)(?: first)?: "
+    r"(?:write )?(?P<names>\w+(?:, \w+)*)"
+)
+
+
+def waiting_tests(run: NotebookRun, folder: Union[str, Path]) -> Dict[str, List[str]]:
+    """The failed tests of a run that fail only because a function they build on fails.
+
+    A test waits on a function of its own notebook when that function fails its own visible
+    test (:class:`~duckielib.solution.cascade.Dependencies`, read from the notebooks as they
+    are), and on an earlier notebook's when the load of the student's earlier work stops in it
+    saying which function to fix or write first, while the test's own exercise is written.
+
+    Args:
+        run: a notebook's run, its tests' results known.
+        folder: the course folder the notebook is in (one folder per notebook).
+
+    Returns:
+        ``grade_id -> functions``, each ``"delta_phi"`` (this notebook's) or
+        ``"05_odometry: delta_phi"``; the tests that fail on their own are left out.
+    """
+    from duckielib.solution import SolutionError, export_solution
+    from duckielib.solution.cascade import Dependencies
+
+    folder = Path(folder)
+    failed = run.failed_tests
+    if not failed:
+        return {}
+    dependencies = Dependencies.from_source(folder)
+    errors = {cell.grade_id: cell.error for cell in run.raised if cell.grade_id}
+    unwritten: Optional[List[str]] = None
+    waits: Dict[str, List[str]] = {}
+    for grade_id in failed:
+        test = (run.name, grade_id)
+        earlier = _EARLIER.match(errors.get(grade_id, ""))
+        if earlier and earlier["notebook"] < run.name:
+            if unwritten is None:
+                try:
+                    unwritten = export_solution(folder, strict=False).unfinished
+                except SolutionError:
+                    unwritten = []
+            own = {function.name for function in dependencies.own_functions(test)}
+            if not own & set(unwritten):
+                waits[grade_id] = [f"{earlier['notebook']}: {earlier['names']}"]
+            continue
+        causes = dependencies.causes(test, [(run.name, other) for other in failed])
+        if causes:
+            waits[grade_id] = [
+                function.name
+                if function.assignment == run.name
+                else f"{function.assignment}: {function.name}"
+                for function in causes
+            ]
+    return waits
 
 
 def _source(cell: Any) -> str:
@@ -307,6 +413,7 @@ def run_notebook(path: Union[str, Path], cell_seconds: float = CELL_SECONDS) -> 
             run.exercises[grade_id] = number
         elif kind == "test":
             run.tests[grade_id] = cell.get("execution_count") is not None and number not in raised
+    run.waits = waiting_tests(run, path.parent.parent)
     return run
 
 

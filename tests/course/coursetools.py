@@ -140,7 +140,8 @@ def too_early(run) -> str | None:
 
     It may stop only at the first exercise: its own cell, the first test cell after it, or a
     cell between the two that says in one sentence what to finish first (a ``SolutionError``
-    starting "Finish"). A notebook without exercises must run to the end.
+    starting "Finish", or "Fix notebook" for an earlier notebook's function that fails its
+    visible test). A notebook without exercises must run to the end.
     """
     stop = run.stops_at
     if run.stopped is not None:
@@ -155,7 +156,9 @@ def too_early(run) -> str | None:
             f"{run.name}: Run All stops at {stop.describe()}, before the first exercise "
             f"({first}, cell {number}): what comes before it must run without it"
         )
-    if stop.kind in ("exercise", "test") or stop.error.startswith("SolutionError: Finish"):
+    if stop.kind in ("exercise", "test") or stop.error.startswith(
+        ("SolutionError: Finish", "SolutionError: Fix notebook")
+    ):
         return None
     return (
         f"{run.name}: Run All stops at {stop.describe()}, after the first exercise ({first}) "

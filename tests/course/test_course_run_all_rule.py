@@ -29,6 +29,9 @@ def test_the_first_exercise_its_test_or_a_finish_sentence_may_stop_run_all():
     assert too_early(made_up_run(15, kind="exercise", error="SyntaxError: invalid")) is None
     finish = "SolutionError: Finish notebook 07_control: write PID first."
     assert too_early(made_up_run(16, error=finish)) is None
+    fix = "SolutionError: Fix notebook 05_odometry first: delta_phi fails its visible test: ..."
+    assert too_early(made_up_run(16, error=fix)) is None
+    assert "before the first exercise" in too_early(made_up_run(4, error=fix))
     assert too_early(made_up_run(None)) is None
 
 
