@@ -71,7 +71,9 @@ test-fast: compiled
 
 # JupyterLab as students use it: the repository's files (the README among them) with course/
 # open, nbgrader's Validate checking every cell but not its instructor tools (duckielib/lab/),
-# and the course's commands (duckie handin ...) in its terminals.
+# and the course's commands (duckie handin ...) in its terminals: each terminal runs your
+# $SHELL with this PATH, .venv/bin first, even when no terminal started the server (JupyterLab
+# would then open login shells, whose profile sets PATH anew; duckielib/lab/ tells it not to).
 lab: $(STAMP)
 	@test -d course || { echo "course/ has no released notebooks yet: see the README's status section."; exit 1; }
 	PATH="$(CURDIR)/$(BIN):$$PATH" \

@@ -116,6 +116,49 @@ def test_jupyterlab_serves_the_course_without_the_instructor_tools(tmp_path):
             get(port, "/formgrader")
 
 
+#: Escape sequences a terminal sends besides the text (colours, bracketed paste mode).
+ESCAPES = re.compile(r"\x1b\[[0-9;?]*[A-Za-z]")
+
+
+def test_duckie_runs_in_a_terminal_of_jupyterlab(student_lab):
+    # `make lab` puts .venv/bin first on the server's PATH. Started without a terminal (as
+    # here: its output goes nowhere), the server once opened login shells, whose profile
+    # (/etc/profile) set PATH anew: `duckie handin` was "command not found" there.
+    import websocket  # websocket-client, which jupyter_server uses
+
+    _, port = student_lab
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{port}/api/terminals",
+        method="POST",
+        headers={"Authorization": f"token {TOKEN}"},
+    )
+    with urllib.request.urlopen(request, timeout=10) as response:
+        name = json.loads(response.read())["name"]
+    terminal = websocket.create_connection(
+        f"ws://127.0.0.1:{port}/terminals/websocket/{name}?token={TOKEN}", timeout=30
+    )
+    try:
+        terminal.send(json.dumps(["stdin", 'echo "duckie=$(command -v duckie) path=$PATH"\r']))
+        shown, said = "", []
+        deadline = time.monotonic() + 30
+        while not said:
+            assert time.monotonic() < deadline, f"the terminal did not answer: {shown!r}"
+            kind, *text = json.loads(terminal.recv())
+            shown += text[0] if kind == "stdout" else ""
+            lines = re.split(r"[\r\n]+", ESCAPES.sub("", shown))
+            said = [line for line in lines[:-1] if line.startswith("duckie=")]
+    finally:
+        terminal.close()
+        request.method = "DELETE"
+        request.full_url += f"/{name}"
+        urllib.request.urlopen(request, timeout=10).close()
+    duckie, path = re.fullmatch(r"duckie=(.*) path=(.*)", said[0]).groups()
+    venv = str(ROOT / ".venv" / "bin")
+    assert duckie == f"{venv}/duckie"
+    folders = path.split(":")
+    assert folders.index(venv) < folders.index("/usr/bin"), path  # before the system's
+
+
 #: The notebook on screen (the others stay in the page, hidden), its prompts and its errors.
 SHOWN = ".jp-NotebookPanel:not(.lm-mod-hidden)"
 PROMPTS = f"{SHOWN} .jp-CodeCell .jp-InputPrompt"
