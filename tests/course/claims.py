@@ -15,6 +15,7 @@ To add a claim: make the cell that draws the figure print the numbers the senten
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import Callable, Dict, List, Mapping, Optional
@@ -480,5 +481,455 @@ CLAIMS["05_odometry"] = [
         printed=rf"realistic, ground truth: turned {_NUMBER} rad = (?P<truth>{_NUMBER}) deg",
         holds=lambda truth: -120 < truth < 0,
         meaning="the realistic robot turned less than 120 degrees clockwise in total",
+    ),
+]
+
+
+CLAIMS["06_driving"] = [
+    Claim(
+        says="about 30 times per second: each time a pair of encoder readings completes",
+        printed=r"average rate: (?P<hz>[\d.]+)",
+        holds=lambda hz: 28 <= hz <= 32,
+        meaning="the odometry publishes about 30 poses a second",
+    ),
+    Claim(
+        says="both lines go on a little after the zero command: forward after the first stop, "
+        "backward after the last, the odometry in step with the truth",
+        printed=r"after zero command 1: the odometry went on (?P<odometry1>[+-][\d.]+) cm, the "
+        r"robot really (?P<truth1>[+-][\d.]+) cm[^\n]*\nafter zero command 2: the odometry went "
+        r"on (?P<odometry2>[+-][\d.]+) cm, the robot really (?P<truth2>[+-][\d.]+) cm",
+        holds=lambda odometry1, truth1, odometry2, truth2: (
+            0 < odometry1 < 5
+            and 0 < truth1 < 5
+            and -5 < odometry2 < 0
+            and -5 < truth2 < 0
+            and abs(odometry1 - truth1) <= 0.3
+            and abs(odometry2 - truth2) <= 0.3
+        ),
+        meaning="after each stop both go on a few cm, the move's way, within 3 mm of each other",
+    ),
+    Claim(
+        says="so the first quarter turn ends right at θ = 0, where the heading wraps",
+        printed=r"end of the first turn: odometry theta (?P<theta>[\d.]+) rad, theta - theta0 = "
+        r"(?P<naive>[+-][\d.]+) rad, tracker total = (?P<tracker>[+-][\d.]+) rad",
+        holds=lambda theta, naive, tracker: (
+            theta > 3 * math.pi / 2 and abs(tracker + math.pi / 2) < 0.35
+        ),
+        meaning="the turn ends within 20° past θ = 0, so the odometry's θ wrapped to near 2π",
+    ),
+    Claim(
+        says="What would a driver that stops when θ \u2212 θ₀ ≤ \u2212π/2 have done here?",
+        printed=r"end of the first turn: odometry theta (?P<theta>[\d.]+) rad, theta - theta0 = "
+        r"(?P<naive>[+-][\d.]+) rad, tracker total = (?P<tracker>[+-][\d.]+) rad",
+        holds=lambda theta, naive, tracker: naive > 0 and tracker < -math.pi / 2,
+        meaning="θ - θ₀ jumped at the wrap and ends positive, never below -π/2; the tracker did",
+    ),
+    Claim(
+        says="a wheel of the realistic robot at rest needs PWM 83 (duty 0.12, the edge of its "
+        "motors' dead band) to break free",
+        printed=r"smallest speed that moved the realistic robot: (?P<smallest>[\d.]+) m/s \(PWM "
+        r"(?P<pwm>\d+) needs u >= (?P<u>[\d.]+), v >= (?P<v>[\d.]+) m/s\)",
+        holds=lambda smallest, pwm, u, v: (
+            pwm == 83 and abs(u - 0.12) < 0.005 and v <= smallest <= v + 0.0026
+        ),
+        meaning="PWM 83 is duty 0.12, and the slowest speed that moved is the next one above it",
+    ),
+    Claim(
+        says="It waits for the odometry to reach a goal that never comes",
+        printed=r"v = 0\.03 m/s: (?P<done>\d+) of 2 moves done after (?P<seconds>\d+) s; the "
+        r"robot moved (?P<moved>[\d.]+) cm",
+        holds=lambda done, seconds, moved: done == 0 and moved < 0.1,
+        meaning="at 0.03 m/s no move is done when the limit ends the run, the robot did not move",
+    ),
+    Claim(
+        says="short of 1.25 m at every speed, and less so the faster it went",
+        printed=r"the robot stopped (?P<slowest>[+-][\d.]+) to (?P<fastest>[+-][\d.]+) cm along "
+        r"the heading \(the most: (?P<most>[+-][\d.]+) cm\)",
+        holds=lambda slowest, fastest, most: most < 0 and fastest > slowest + 1,
+        meaning="every speed stops before 1.25 m, the fastest over 1 cm closer than the slowest",
+    ),
+    Claim(
+        says="when the odometry says 1.25 m, the robot has gone about 6 cm less",
+        printed=r"the odometry was off by (?P<all_slowest>[\d.]+) to (?P<all_fastest>[\d.]+) cm: "
+        r"(?P<along_slowest>[+-][\d.]+) to (?P<along_fastest>[+-][\d.]+) cm along the heading",
+        holds=lambda all_slowest, all_fastest, along_slowest, along_fastest: (
+            4.5 < along_slowest < 8 and 4.5 < along_fastest < 8
+        ),
+        meaning="along the heading the odometry is 4.5 to 8 cm ahead of the truth at every speed",
+    ),
+    Claim(
+        says="The odometry's error grows with the speed too",
+        printed=r"the odometry was off by (?P<all_slowest>[\d.]+) to (?P<all_fastest>[\d.]+) cm: "
+        r"(?P<along_slowest>[+-][\d.]+) to (?P<along_fastest>[+-][\d.]+) cm along the heading, "
+        r"(?P<side_slowest>[+-][\d.]+) to (?P<side_fastest>[+-][\d.]+) cm sideways",
+        holds=lambda **n: (
+            n["all_fastest"] > n["all_slowest"] + 1
+            and abs(n["side_fastest"]) > abs(n["side_slowest"]) + 1
+            and abs(n["along_fastest"] - n["along_slowest"]) < 1
+        ),
+        meaning="the odometry's error grows by its sideways part; its part along the heading stays",
+    ),
+    Claim(
+        says="Does the true sideways drift depend on the speed?",
+        printed=r"cm along the heading \(the most: [+-][\d.]+ cm\), (?P<side_slowest>[+-][\d.]+) "
+        r"to (?P<side_fastest>[+-][\d.]+) cm to the side",
+        holds=lambda side_slowest, side_fastest: abs(side_fastest) < abs(side_slowest) / 2,
+        meaning="it does: the true drift at the fastest speed is under half that at the slowest",
+    ),
+    Claim(
+        says="the stop is only decided at the next odometry update and loop cycle",
+        printed=r"ideal\s+straight \+1\.25 m\s+(?P<late>[+-][\d.]+) cm\s+"
+        r"(?P<coasted>[+-][\d.]+) cm",
+        holds=lambda late, coasted: 0 <= late <= 1.4 and coasted > 0,
+        meaning="the stop is sent within two updates' travel past the goal (1.3 cm), then coasts",
+    ),
+    Claim(
+        says="nobody corrects the drift that the realistic robot's unequal wheels cause",
+        printed=r"realistic straight \+1\.25 m\s+[+-][\d.]+ cm\s+[+-][\d.]+ cm\s+[+-][\d.]+ cm\s+"
+        r"[\d.]+ cm\s+(?P<side>[+-][\d.]+) cm",
+        holds=lambda side: side < -1,
+        meaning="the realistic robot ends the forward move over 1 cm to the right of its line",
+    ),
+    Claim(
+        says='A negative "coasted" is worth a second look.',
+        printed=r"realistic straight -1\.25 m\s+[+-][\d.]+ cm\s+(?P<coasted>[+-][\d.]+) cm",
+        holds=lambda coasted: coasted < 0,
+        meaning="the realistic robot's way back has a negative coasted (the sign rule)",
+    ),
+    Claim(
+        says="how the wrong value scales each estimate",
+        printed=r"R 5 % too large: the odometry says (?P<said>[\d.]+) m, the robot really went "
+        r"(?P<went>[\d.]+) m\nbaseline 10 % too large: the odometry says (?P<said_turn>[+-][\d.]+)"
+        r"°, the robot really turned (?P<turned>[+-][\d.]+)°",
+        holds=lambda said, went, said_turn, turned: (
+            1.03 < said / went < 1.07 and 1.06 < turned / said_turn < 1.14
+        ),
+        meaning="R 5 % too large scales the distance by about 5 %, the baseline the turn by 10 %",
+    ),
+    Claim(
+        says="does either gap ever shrink for good?",
+        printed=r"after lap 1: the robot (?P<plan1>[\d.]+) cm from the plan, your odometry "
+        r"(?P<odometry1>[\d.]+) cm from the truth\nafter lap 2: the robot (?P<plan2>[\d.]+) cm "
+        r"from the plan, your odometry (?P<odometry2>[\d.]+) cm from the truth",
+        holds=lambda plan1, odometry1, plan2, odometry2: plan2 > plan1 and odometry2 > odometry1,
+        meaning="neither: both gaps are larger after the second lap than after the first",
+    ),
+    Claim(
+        says="after the zero command, the count goes **up** while the robot still rolls back",
+        printed=r"hard stop: after the last zero command the robot rolled (?P<rolled>[+-][\d.]+) "
+        r"cm, its right wheel's count went (?P<ticks>[+-]\d+) ticks",
+        holds=lambda rolled, ticks: rolled < 0 and ticks > 0,
+        meaning="after the hard stop the robot rolls back while the right wheel counts up",
+    ),
+    Claim(
+        says="The odometry believes the robot went forward at the very end, and from then on "
+        "every estimate carries that error",
+        printed=r"hard stop:[^\n]*\n\s+the odometry saw the way back (?P<short>-?[\d.]+) cm "
+        r"shorter, the first quarter turn (?P<turn>-?[\d.]+)° smaller",
+        holds=lambda short, turn: short > 0.5,
+        meaning="after a hard stop the odometry saw the way back over 5 mm shorter than it was",
+    ),
+    Claim(
+        says="A clockwise turn on the spot ends the same way: its right wheel turns backwards",
+        printed=r"hard stop:[^\n]*\n\s+the odometry saw the way back (?P<short>-?[\d.]+) cm "
+        r"shorter, the first quarter turn (?P<turn>-?[\d.]+)° smaller",
+        holds=lambda short, turn: turn > 1,
+        meaning="after a hard stop the odometry saw the clockwise turn over 1° smaller than it was",
+    ),
+    Claim(
+        says="Slowing down leaves less to coast, so fewer ticks go the wrong way, for a little "
+        "more time",
+        printed=r"hard stop: after the last zero command the robot rolled "
+        r"(?P<hard_rolled>[+-][\d.]+) cm, its right wheel's count went "
+        r"(?P<hard_ticks>[+-]\d+) ticks\n\s+the odometry saw "
+        r"the way back (?P<hard_short>-?[\d.]+) cm shorter, the first quarter turn "
+        r"(?P<hard_turn>-?[\d.]+)° smaller than they were\n\s+the two tasks took "
+        r"(?P<hard_s>[\d.]+) s and (?P<hard_turn_s>[\d.]+) s\nslowed down: after the last zero "
+        r"command the robot rolled (?P<slow_rolled>[+-][\d.]+) cm, its right wheel's count went "
+        r"(?P<slow_ticks>[+-]\d+) ticks\n\s+the odometry saw the way back (?P<slow_short>-?[\d.]+)"
+        r" cm shorter, the first quarter turn (?P<slow_turn>-?[\d.]+)° smaller than they were\n"
+        r"\s+the two tasks took (?P<slow_s>[\d.]+) s and (?P<slow_turn_s>[\d.]+) s",
+        holds=lambda **n: (
+            abs(n["slow_rolled"]) < abs(n["hard_rolled"])
+            and n["slow_ticks"] < n["hard_ticks"]
+            and n["slow_short"] < n["hard_short"]
+            and n["slow_turn"] < n["hard_turn"]
+            and n["slow_s"] > n["hard_s"]
+            and n["slow_turn_s"] >= n["hard_turn_s"]
+        ),
+        meaning="slowed down, the robot rolls less after the stop, fewer ticks count up, the "
+        "odometry's errors are smaller and the tasks take longer",
+    ),
+    Claim(
+        says="Launched nodes start when the robot next runs, so the first list has only the "
+        "robot's own nodes",
+        printed=r"launched, before the robot runs:\n(?:(?!/\w+/(?:driver|odometry|recorder)_node\n)"
+        r"/\S+\n)+\nwhile driving:",
+        holds=lambda: True,
+        meaning="the list before the robot runs has no driver, odometry or recorder node",
+    ),
+    Claim(
+        says="the driver has a list of moves, so it loops, and when the list is done it returns",
+        printed=r"\ndone:\n(?:(?!/\w+/driver_node\n)/\S+\n)*/\w+/odometry_node\n"
+        r"(?:(?!/\w+/driver_node\n)/\S+\n)*\n",
+        holds=lambda: True,
+        meaning="once the moves are done, the driver has left the node list and the odometry stays",
+    ),
+    Claim(
+        says="`forgetful_driver` drives until the odometry says 0.3 m, then simply returns: no "
+        "zero command, no shutdown hook",
+        printed=r"driver_node\s+returned at\s+[\d.]+ s\s+False\s+(?P<returned>[\d.]+) cm\n"
+        r"driver_node\s+killed\s+at\s+[\d.]+ s\s+False\s+(?P<killed>[\d.]+) cm\n"
+        r"forgetful_driver\s+returned at\s+[\d.]+ s\s+False\s+(?P<forgetful_returned>[\d.]+) cm\n"
+        r"forgetful_driver\s+killed\s+at\s+[\d.]+ s\s+False\s+(?P<forgetful_killed>[\d.]+) cm",
+        holds=lambda **n: (
+            n["returned"] < 3
+            and n["killed"] < 3
+            and n["forgetful_returned"] > 30
+            and n["forgetful_killed"] > 30
+        ),
+        meaning="the forgetful driver leaves the robot driving however it ends, driver_node not",
+    ),
+    Claim(
+        says="motor lag, more at higher speed",
+        printed=r"the robot stopped (?P<slowest>[+-][\d.]+) to (?P<fastest>[+-][\d.]+) cm along "
+        r"the heading",
+        holds=lambda slowest, fastest: fastest > slowest + 1,
+        meaning="the robot goes further after the stop at the fastest speed than at the slowest",
+    ),
+    Claim(
+        says="Too slow and the wheels never start: the driver would wait forever.",
+        printed=r"v = 0\.03 m/s: (?P<done>\d+) of 2 moves done after (?P<seconds>\d+) s; the "
+        r"robot moved (?P<moved>[\d.]+) cm",
+        holds=lambda done, seconds, moved: done == 0 and moved < 0.1,
+        meaning="at 0.03 m/s the robot never moved and no move was done",
+    ),
+]
+
+_CONTROL_PID_ROW = r"\n\s+{error}\s+(?P<p>[\d.]+)\s+(?P<pi>[\d.]+)\s+(?P<pd>[\d.]+)"
+_CONTROL_LAST_ROWS = (
+    r"\n\s+0\.03\s+(?P<p1>[\d.]+)\s+(?P<pi1>[\d.]+)\s+(?P<pd1>[\d.]+)\s*"
+    r"\n\s+0\.03\s+(?P<p2>[\d.]+)\s+(?P<pi2>[\d.]+)\s+(?P<pd2>[\d.]+)\s*"
+    r"\n\s+0\.03\s+(?P<p3>[\d.]+)\s+(?P<pi3>[\d.]+)\s+(?P<pd3>[\d.]+)"
+)
+_CONTROL_OPEN_LOOP = (
+    r"straight, really:\s+(?P<gap>[\d.]+) cm from the goal,\s+(?P<right>-?[\d.]+) cm right of the "
+    r"line, heading\s+(?P<truth>[\d.]+) deg\nstraight, odometry:[^\n]*heading\s+"
+    r"(?P<odometry>[\d.]+) deg\nturn,\s+really:[^\n]*heading - target =\s+"
+    r"(?P<turn_truth>[+-][\d.]+) deg\nturn,\s+odometry:[^\n]*heading - target =\s+"
+    r"(?P<turn_odometry>[+-][\d.]+) deg"
+)
+_CONTROL_STEPS = (
+    r"P, kp = 2:\s+never\s+(?P<p2_past>[\d.]+) deg\s+(?P<p2_odometry>-?[\d.]+) deg\s+"
+    r"(?P<p2_really>-?[\d.]+) deg\n\s*P, kp = 16:\s+(?P<p16_settle>[\d.]+) s\s+(?P<p16_past>[\d.]+)"
+    r" deg\s+(?P<p16_odometry>-?[\d.]+) deg\s+(?P<p16_really>-?[\d.]+) deg\n\s*PI, kp = 3, ki = "
+    r"0\.6:\s+never\s+(?P<pi_past>[\d.]+) deg\s+(?P<pi_odometry>-?[\d.]+) deg\s+"
+    r"(?P<pi_really>-?[\d.]+) deg\n\s*PID, kp = 16, ki = 0\.6, kd = 0\.6:\s+(?P<pid_settle>[\d.]+) "
+    r"s\s+(?P<pid_past>[\d.]+) deg\s+(?P<pid_odometry>-?[\d.]+) deg\s+(?P<pid_really>-?[\d.]+) deg"
+)
+_CONTROL_SWEEP_ROW = (
+    r"PI, kp = {kp}, ki = 0\.6:\s+(?P<settle>[\d.]+) s\s+(?P<past>[\d.]+) deg\s+"
+    r"(?P<odometry>-?[\d.]+) deg\s+(?P<really>-?[\d.]+) deg"
+)
+_CONTROL_CORNERS = (
+    r"  really:\s+(?P<really>[\d.]+) cm from the last corner\nodometry:\s+(?P<odometry>[\d.]+) cm "
+    r"from the last corner\nwhen the odometry reached each corner, the robot really was "
+    r"(?P<first>[\d.]+) cm, [\d.]+ cm, [\d.]+ cm away"
+)
+_CONTROL_OPEN_CLOSED = (
+    r"straight: really from the goal \(cm\)\s+(?P<open_really>[\d.]+)\s+(?P<closed_really>[\d.]+)"
+    r"\n\s*straight: odometry from the goal \(cm\)\s+(?P<open_odometry>[\d.]+)\s+"
+    r"(?P<closed_odometry>[\d.]+)\n\s*turn: really from the target \(deg\)\s+(?P<open_turn>[\d.]+)"
+    r"\s+(?P<closed_turn>[\d.]+)"
+)
+CLAIMS["07_control"] = [
+    Claim(
+        says="at first the commands are clipped at the limit of 2 rad/s",
+        printed=_CONTROL_PID_ROW.format(error=r"1\.20"),
+        holds=lambda p, pi, pd: p == pi == pd == 2.0,
+        meaning="for the first error, P, PI and PD all send 2 rad/s",
+    ),
+    Claim(
+        says="While the error drops fast, the PD command is lower than P's: the D term brakes.",
+        printed=_CONTROL_PID_ROW.format(error=r"0\.50"),
+        holds=lambda p, pi, pd: pd < p < pi,
+        meaning="while the error drops, PD's command is below P's (and PI's above)",
+    ),
+    Claim(
+        says="When the error stops changing, the D term is 0 and PD equals P; P's 0.06 rad/s "
+        "cannot move a wheel at rest",
+        printed=_CONTROL_LAST_ROWS,
+        holds=lambda p2, pd2, p3, pd3, **_: p2 == pd2 == p3 == pd3 == 0.06,
+        meaning="with the error steady at 0.03 rad, P and PD both send 0.06 rad/s",
+    ),
+    Claim(
+        says="PI's command is a little larger all along and keeps growing, slowly, while the "
+        "error stays",
+        printed=_CONTROL_LAST_ROWS,
+        holds=lambda p1, pi1, pi2, pi3, **_: p1 < pi1 < pi2 < pi3 < pi1 + 0.01,
+        meaning="with the error steady, PI's command is above P's and grows by under 0.01 rad/s",
+    ),
+    Claim(
+        says="the robot curved to the right (the weaker right wheel): it ended facing a few "
+        "degrees right of 90° and a few centimetres to the right of the line",
+        printed=_CONTROL_OPEN_LOOP,
+        holds=lambda right, truth, **_: 80 < truth < 89 and 2 < right < 10,
+        meaning="the open-loop robot ends facing 1 to 10° right of 90°, 2 to 10 cm right",
+    ),
+    Claim(
+        says="the **odometry saw the turn**: its heading at the end is as far from 90°",
+        printed=_CONTROL_OPEN_LOOP,
+        holds=lambda truth, odometry, **_: odometry < 89 and abs(truth - odometry) < 1,
+        meaning="the odometry's final heading is within 1° of the true one",
+    ),
+    Claim(
+        says="the quarter turn went past the target, by the odometry and even more really",
+        printed=_CONTROL_OPEN_LOOP,
+        holds=lambda turn_truth, turn_odometry, **_: turn_truth < turn_odometry < 0,
+        meaning="the open-loop turn ends past the target, really further than by the odometry",
+    ),
+    Claim(
+        says="Both end facing about 10°, but the raw difference sends the robot the long way "
+        "round, almost a whole turn clockwise at the top turn rate",
+        printed=r"angle_error \(wrapped\): turned\s+(?P<short>[+-][\d.]+) deg, ended at\s+"
+        r"(?P<short_end>[\d.]+) deg\n\s*raw difference target - theta: turned\s+"
+        r"(?P<long>[+-][\d.]+) deg, ended at\s+(?P<long_end>[\d.]+) deg",
+        holds=lambda short, short_end, long, long_end: (
+            abs(short_end - 10) < 3 and abs(long_end - 10) < 3 and 0 < short < 40 and long < -300
+        ),
+        meaning="both runs end within 3° of 10°; the raw one turned over 300° clockwise",
+    ),
+    Claim(
+        says="**P, kp = 2** slows down gently but stops far short",
+        printed=_CONTROL_STEPS,
+        holds=lambda p2_past, p2_odometry, p2_really, **_: (
+            p2_past == 0 and p2_odometry > 10 and 0.7 < 2 * math.radians(p2_odometry) < 1.3
+        ),
+        meaning="P, kp = 2 never goes past and stops over 10° short, where kp·e is about 1 rad/s",
+    ),
+    Claim(
+        says="**P, kp = 16** gets there fast, but it reaches the target still turning at full "
+        "rate; the motors lag, so it goes past, reverses, and settles wherever the dead zone "
+        "stops it",
+        printed=_CONTROL_STEPS,
+        holds=lambda **n: (
+            n["p16_settle"] < 2
+            and n["p16_past"] > 2
+            and n["p16_odometry"] < 0
+            and n["p16_really"] < 0
+        ),
+        meaning="P, kp = 16 is within 2° in under 2 s, goes over 2° past and stays past",
+    ),
+    Claim(
+        says="with a small kp and ki = 0.6 it has a long way to build up from, longer than this "
+        "run",
+        printed=_CONTROL_STEPS,
+        holds=lambda pi_past, pi_odometry, **_: pi_odometry > 2,
+        meaning="the PI controller never gets within 2° in the run",
+    ),
+    Claim(
+        says="**PID**: the D term brakes the fast P controller before the target: it settles "
+        "first, without going past, within a degree of the target by the odometry and really",
+        printed=_CONTROL_STEPS,
+        holds=lambda **n: (
+            n["pid_settle"] < n["p16_settle"]
+            and n["pid_past"] < 0.5
+            and abs(n["pid_odometry"]) < 1
+            and abs(n["pid_really"]) < 1
+        ),
+        meaning="the PID settles before P, kp = 16 (the others never do), without going past, "
+        "within 1° by the odometry and really",
+    ),
+    Claim(
+        says="the controller that went past the target and came back (P, kp = 16) ends with the "
+        "odometry and the truth a few degrees apart; the others end where their odometry says, "
+        "within a degree",
+        printed=_CONTROL_STEPS,
+        holds=lambda **n: (
+            abs(n["p16_odometry"] - n["p16_really"]) > 2
+            and abs(n["p2_odometry"] - n["p2_really"]) < 1
+            and abs(n["pi_odometry"] - n["pi_really"]) < 1
+            and abs(n["pid_odometry"] - n["pid_really"]) < 1
+        ),
+        meaning="P, kp = 16 ends with odometry and truth over 2° apart; the others within 1°",
+    ),
+    Claim(
+        says="At a small kp the turn is slow: what does the integral do during all that time?",
+        printed=_CONTROL_SWEEP_ROW.format(kp=r"1\.0"),
+        holds=lambda settle, past, odometry, really: settle > 2,
+        meaning="at kp = 1 the integral brings the robot within 2°, after over 2 s",
+    ),
+    Claim(
+        says="At a large kp, is the odometry still right about where the robot ended?",
+        printed=_CONTROL_SWEEP_ROW.format(kp=r"16\.0"),
+        holds=lambda past, odometry, really, **_: past > 2 and abs(odometry - really) > 2,
+        meaning="at kp = 16 the robot goes past and the odometry ends over 2° from the truth",
+    ),
+    Claim(
+        says="Pick the gains where the robot settles quickly **and** the odometry and the truth "
+        "agree",
+        printed=_CONTROL_SWEEP_ROW.format(kp=r"8\.0"),
+        holds=lambda settle, odometry, really, **_: settle < 1.5 and abs(odometry - really) < 1,
+        meaning="kp = 8 (the gains used in section 5) settles in under 1.5 s, odometry and truth "
+        "within 1°",
+    ),
+    Claim(
+        says="by the odometry the robot went through every corner and ended about 2 cm from the "
+        "last one, but really it ended tens of centimetres away, and it was already far from the "
+        "first corner when the odometry reached it",
+        printed=_CONTROL_CORNERS,
+        holds=lambda really, odometry, first: odometry < 3 and really > 20 and first > 10,
+        meaning="odometry within 3 cm of the last corner, the truth over 20 cm away, and over "
+        "10 cm from the first corner when the odometry reached it",
+    ),
+    Claim(
+        says="The last run is the same drive with encoders that count the way the wheels really "
+        "turn: it ends within a few centimetres of the corner",
+        printed=r"encoders counting the way the wheels turn: really (?P<really>[\d.]+) cm, by the "
+        r"odometry (?P<odometry>[\d.]+) cm",
+        holds=lambda really, odometry: really < 5,
+        meaning="without the sign rule the robot really ends within 5 cm of the last corner",
+    ),
+    Claim(
+        says='which of the two, "really" or "odometry", does the controller bring to the '
+        "goal, and how close?",
+        printed=_CONTROL_OPEN_CLOSED,
+        holds=lambda closed_really, open_odometry, closed_odometry, **_: (
+            closed_odometry < min(closed_really, open_odometry)
+        ),
+        meaning="closed loop, the odometry ends closer to the goal than the robot really does",
+    ),
+    Claim(
+        says="Can a controller correct an error that its measurement does not see?",
+        printed=r"straight: really from the goal \(cm\)\s+[\d.]+\s+(?P<really>[\d.]+)[\s\S]*"
+        r"closed loop, straight: the odometry ends (?P<gap>[\d.]+) cm from where the robot "
+        r"really is",
+        holds=lambda really, gap: gap > 2 and really - gap < 2,
+        meaning="closed loop, most of what is left is the odometry's own error",
+    ),
+    Claim(
+        says="It removes the errors the measurement can see: unequal wheels, the dead zone, "
+        "coasting.",
+        printed=_CONTROL_OPEN_CLOSED,
+        holds=lambda **n: (
+            n["open_turn"] > 5 and n["closed_turn"] < 1 and n["closed_really"] < n["open_really"]
+        ),
+        meaning="closed loop, the turn ends within 1° (open loop over 5°) and the straight closer",
+    ),
+    Claim(
+        says="Gentle gains that settle without overshoot keep the odometry honest",
+        printed=_CONTROL_STEPS,
+        holds=lambda **n: (
+            abs(n["p16_odometry"] - n["p16_really"]) > 2
+            and n["pid_past"] < 0.5
+            and abs(n["pid_odometry"] - n["pid_really"]) < 1
+        ),
+        meaning="the overshooting P ends with odometry and truth over 2° apart, the PID within 1°",
+    ),
+    Claim(
+        says="The controller can only be as good as its measurement.",
+        printed=_CONTROL_CORNERS,
+        holds=lambda really, odometry, first: odometry < 3 and really > 20,
+        meaning="through the corners the odometry ends within 3 cm, the robot over 20 cm away",
     ),
 ]
