@@ -484,7 +484,6 @@ CLAIMS["05_odometry"] = [
     ),
 ]
 
-
 CLAIMS["06_driving"] = [
     Claim(
         says="about 30 times per second: each time a pair of encoder readings completes",
@@ -691,6 +690,15 @@ CLAIMS["06_driving"] = [
         meaning="the forgetful driver leaves the robot driving however it ends, driver_node not",
     ),
     Claim(
+        says="the node lists above (which nodes remain after the driver is done, and why), the "
+        "last command recorded",
+        printed=r"last command, at t = [\d.]+ s: v = (?P<v>-?[\d.]+) m/s, omega = "
+        r"(?P<omega>-?[\d.]+) rad/s\nwheel speeds now: left (?P<left>-?[\d.]+) rad/s, right "
+        r"(?P<right>-?[\d.]+) rad/s",
+        holds=lambda v, omega, left, right: v == omega == left == right == 0,
+        meaning="the driver's last command was a zero command, and the wheels stand still",
+    ),
+    Claim(
         says="motor lag, more at higher speed",
         printed=r"the robot stopped (?P<slowest>[+-][\d.]+) to (?P<fastest>[+-][\d.]+) cm along "
         r"the heading",
@@ -743,6 +751,13 @@ _CONTROL_OPEN_CLOSED = (
     r"\s+(?P<closed_turn>[\d.]+)"
 )
 CLAIMS["07_control"] = [
+    Claim(
+        says="from θ = 350° to a target of 10° is a turn of **+20°**, not \u2212340°",
+        printed=r"raw difference target - theta:\s+(?P<raw>[+-][\d.]+) deg\n"
+        r"angle_error\(target, theta\):\s+(?P<wrapped>[+-][\d.]+) deg",
+        holds=lambda raw, wrapped: raw == -340 and wrapped == 20,
+        meaning="the raw difference is -340°, angle_error +20°",
+    ),
     Claim(
         says="at first the commands are clipped at the limit of 2 rad/s",
         printed=_CONTROL_PID_ROW.format(error=r"1\.20"),
