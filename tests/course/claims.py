@@ -948,3 +948,451 @@ CLAIMS["07_control"] = [
         meaning="through the corners the odometry ends within 3 cm, the robot over 20 cm away",
     ),
 ]
+
+
+CLAIMS["08_leds"] = [
+    Claim(
+        says="Nothing follows `---`: the **response is empty**.",
+        printed=r"std_msgs/String pattern_name\n  string data\n---\n(?s:.*?)an empty "
+        r"response:\s+''",
+        holds=lambda: True,
+        meaning="ChangePattern's request is one std_msgs/String and its response has no field",
+    ),
+    Claim(
+        says="The call returns once the emitter has handled the request, so the LEDs have changed "
+        "by the next line.",
+        printed=r"before the call, the LEDs show: WHITE\n[^\n]*\nafter the call, the LEDs "
+        r"show:\s+RED",
+        holds=lambda: True,
+        meaning="the LEDs show RED on the line right after the call",
+    ),
+    Claim(
+        says="The RGB values are 0.8, not 1: the emitter dims every named colour to 80 %.",
+        printed=rf'color_list: \["red"(?:, "red"){{4}}\]\s+rgb_vals:\s+-\s+r: (?P<red>{_NUMBER})',
+        holds=lambda red: abs(red - 0.8) < 1e-6,
+        meaning="the emitter's RED is 0.8 in the red channel",
+    ),
+    Claim(
+        says="The first message came before any call: the latched message of the RED you set above",
+        printed=rf"\[INFO\] \[(?P<call>{_NUMBER})\] \[/duckiebot/led_emitter_node\]: Pattern "
+        rf"changed to GREEN\.(?s:.*?)\nt = (?P<first>{_NUMBER}) s: \['red'",
+        holds=lambda call, first: first < call,
+        meaning="the listener's first message, RED, came before the first call",
+    ),
+    Claim(
+        says="In CAR_SIGNAL_A the white LEDs (0, 2 and 4) blink at 4 Hz: on for 1/8 s, off for "
+        "1/8 s.",
+        printed=rf"CAR_SIGNAL_A: LEDs \[0, 2, 4\] \(white\) blink at (?P<hz>{_NUMBER}) Hz, on for "
+        rf"(?P<on>{_NUMBER}) s, off for as long",
+        holds=lambda hz, on: hz == 4 and on == 0.125,
+        meaning="CAR_SIGNAL_A blinks its white LEDs 0, 2 and 4 at 4 Hz, 0.125 s on",
+    ),
+    Claim(
+        says="Names are case-sensitive (with one exception, kept from Duckietown's table).",
+        printed=r"Pattern 'red' ignored(?s:.*?)Pattern changed to light_off\.",
+        holds=lambda: True,
+        meaning="the emitter ignores 'red' but knows 'light_off'",
+    ),
+    Claim(
+        says="An unknown name is only logged, and ignored.",
+        printed=r"\[ERROR\][^\n]*Pattern 'PURPLE' ignored[^\n]*\n  the call returned normally; "
+        r"the LEDs show CAR_SIGNAL_A",
+        holds=lambda: True,
+        meaning="asking the emitter for PURPLE logs an error, returns normally, changes nothing",
+    ),
+    Claim(
+        says="Your node offers `set_color` and subscribes to the robot's `shutdown` topic.",
+        printed=r"Node \[/duckiebot/light_service_node\]\nPublications:\n None\n\nSubscriptions:\n"
+        r" \* /duckiebot/shutdown \[std_msgs/Empty\]\n\nServices:\n \* "
+        r"/duckiebot/light_service_node/set_color",
+        holds=lambda: True,
+        meaning="rosnode info lists the shutdown subscription and the set_color service only",
+    ),
+    Claim(
+        says="A refused colour leaves the LEDs as they were, nothing is logged as an error",
+        printed=r"asking set_color for 'PURPLE'\n(?:(?!\[ERROR\])[^\n]*\n)*?  the LEDs show GREEN\n"
+        r"\nasking set_color for 'red'\n(?:(?!\[ERROR\])[^\n]*\n)*?  the LEDs show GREEN\n",
+        holds=lambda: True,
+        meaning="after PURPLE and 'red' are refused the LEDs still show GREEN, with no error line",
+    ),
+    Claim(
+        says="the caller learns at once what went wrong and what would be right",
+        printed=r"refused: [^\n]*'PURPLE'[^\n]*WHITE, RED, GREEN, BLUE, YELLOW, LIGHT_OFF",
+        holds=lambda: True,
+        meaning="the refusal names the colour asked for and the valid ones",
+    ),
+    Claim(
+        says="The LEDs start WHITE (the emitter's first pattern), change exactly when each call "
+        "was made",
+        printed=rf"on led_pattern:\n  t = (?P<t0>{_NUMBER}) s: LED 0 is white\n  t = "
+        rf"(?P<t1>{_NUMBER}) s: LED 0 is red\n  t = (?P<t2>{_NUMBER}) s: LED 0 is green\n  "
+        rf"t = (?P<t3>{_NUMBER}) s: LED 0 is blue\n  t = (?P<t4>{_NUMBER}) s: LED 0 is yellow\n",
+        holds=lambda t0, t1, t2, t3, t4: (t0, t1, t2, t3, t4) == (0, 1, 2, 3, 4),
+        meaning="WHITE at 0 s, then one colour at each call, 1 s apart",
+    ),
+    Claim(
+        says="keep the last colour after the light service has stopped, at t = 5 s",
+        printed=rf"the light service stopped at t = (?P<stopped>{_NUMBER}) s\nat t = "
+        rf"(?P<later>{_NUMBER}) s the LEDs show YELLOW",
+        holds=lambda stopped, later: abs(stopped - 5) < 0.06 and later > stopped,
+        meaning="the light service stops at 5 s and the LEDs still show YELLOW after it",
+    ),
+]
+
+_REALISTIC_09 = (
+    rf"realistic: odometry {_NUMBER} cm and {_NUMBER} deg from the truth; really "
+    rf"(?P<home>{_NUMBER}) cm from the start; [^\n]*believed it was (?P<believed>{_NUMBER}) "
+    rf"cm[^\n]*\n\s+after the square: heading (?P<odometry>{_NUMBER}) deg by odometry, "
+    rf"(?P<truth>{_NUMBER}) deg really\n\s+the circle: (?P<across>{_NUMBER}) m across by "
+    rf"odometry \(asked: (?P<asked>{_NUMBER}) m\); travelled (?P<wheels>{_NUMBER}) m by "
+    rf"odometry, (?P<moved>{_NUMBER}) m really\n\s+nearest the mat's edge: (?P<edge>{_NUMBER}) cm"
+)
+_TURNS_09 = (
+    rf"ideal: \d+ turns, (?P<ideal_turns>{_NUMBER}) s of the (?P<ideal_total>{_NUMBER}) s "
+    rf"mission, the longest {_NUMBER} s; {_NUMBER} s of it asking for less than {_NUMBER} "
+    rf"rad/s\n\s*realistic: \d+ turns, (?P<turns>{_NUMBER}) s of the (?P<total>{_NUMBER}) s "
+    rf"mission, the longest (?P<longest>{_NUMBER}) s; (?P<weak>{_NUMBER}) s of it asking for "
+    rf"less than (?P<edge>{_NUMBER}) rad/s"
+)
+_SPIN_09 = (
+    rf"0\.80\s+(?P<ideal>{_NUMBER}) deg\s+(?P<at80>{_NUMBER}) deg\n\s+0\.90\s+{_NUMBER} deg\s+"
+    rf"(?P<at90>{_NUMBER}) deg\n\s+1\.00\s+{_NUMBER} deg\s+(?P<at100>{_NUMBER}) deg\n(?s:.*?)"
+    rf"the slowest that turned the realistic robot: (?P<edge>{_NUMBER}) rad/s"
+)
+_QUARTER_TURN_09 = (
+    rf"without a minimum:\s+(?P<slow>{_NUMBER}) s, ended (?P<slow_error>{_NUMBER}) deg[^\n]*\n"
+    rf"\s+never below {_NUMBER} rad/s:\s+(?P<fast>{_NUMBER}) s, ended (?P<fast_error>{_NUMBER}) "
+    "deg"
+)
+
+CLAIMS["09_mission"] = [
+    Claim(
+        says="let 7 s pass: the first wait is over and the square has just begun",
+        printed=rf"at t = (?P<t>{_NUMBER}) s the LEDs show GREEN",
+        holds=lambda t: 5 < t < 10,
+        meaning="at 7 s the LEDs show the square's GREEN",
+    ),
+    Claim(
+        says="*What to look for:* `mission_node` and `light_service_node` are gone.",
+        printed=r"the nodes still running:\n(?:/duckiebot/(?!mission_node\n|light_service_node\n)"
+        r"\S+\n)*(?!/)",
+        holds=lambda: True,
+        meaning="neither the mission node nor the light service is in the list of nodes running",
+    ),
+    Claim(
+        says="The robot's drivers and the odometry node keep running",
+        printed=r"the nodes still running:\n(?:/\S+\n)*/duckiebot/odometry_node\n",
+        holds=lambda: True,
+        meaning="the odometry node is still running after the mission",
+    ),
+    Claim(
+        says="On the ideal robot both are small",
+        printed=rf"odometry vs truth: (?P<apart>{_NUMBER}) cm and {_NUMBER} deg apart\nthe robot "
+        rf"really ended (?P<home>{_NUMBER}) cm from its start",
+        holds=lambda apart, home: apart < 2 and home < 2,
+        meaning="on the ideal robot odometry and truth, and truth and start, are within 2 cm",
+    ),
+    Claim(
+        says='the "D" drives up the straight back of the letter, then around its bowl with two '
+        "clockwise quarter arcs",
+        printed=r"d\s+GREEN\s+straight 1\.25 m, rotate -90°, [^\n]*arc r=0\.4 m, -90°[^\n]*arc "
+        r"r=0\.4 m, -90°",
+        holds=lambda: True,
+        meaning="the D mission's state d has a straight back and two clockwise quarter arcs",
+    ),
+    Claim(
+        says="after the square its heading is already off by more than 10°",
+        printed=_REALISTIC_09,
+        holds=lambda **n: n["odometry"] - n["truth"] > 10,
+        meaning="after the square the realistic robot's true heading is over 10 degrees short",
+    ),
+    Claim(
+        says="by odometry its circle is more than twice as wide as asked",
+        printed=_REALISTIC_09,
+        holds=lambda **n: n["across"] > 2 * n["asked"],
+        meaning="the realistic robot's circle is over twice the asked diameter by odometry",
+    ),
+    Claim(
+        says="real robot ends up at the mat's edge, and during the circle it scrapes along the "
+        "wall: its wheels turn, yet it moves far less than they say.",
+        printed=_REALISTIC_09,
+        holds=lambda **n: n["edge"] < 10 and n["moved"] < n["wheels"] / 2,
+        meaning="the realistic robot comes within 10 cm of the edge and moves less than half of "
+        "what its wheels say during the circle",
+    ),
+    Claim(
+        says="It ends far from the start while its odometry believes it is home.",
+        printed=_REALISTIC_09,
+        holds=lambda **n: n["home"] > 10 and n["believed"] < 5,
+        meaning="the realistic robot ends over 10 cm from the start, its odometry within 5 cm",
+    ),
+    Claim(
+        says="The realistic run took far longer than the ideal one, and most of the extra time "
+        "went into the turns on the spot.",
+        printed=_TURNS_09,
+        holds=lambda **n: n["turns"] - n["ideal_turns"] > (n["total"] - n["ideal_total"]) / 2,
+        meaning="over half of the realistic run's extra time is spent turning on the spot",
+    ),
+    Claim(
+        says="the realistic robot does not turn at all below about 1 rad/s",
+        printed=_SPIN_09,
+        holds=lambda **n: n["at80"] == n["at90"] == n["at100"] == 0 and 0.9 < n["edge"] < 1.2,
+        meaning="the realistic robot turns nothing at 0.8 to 1.0 rad/s, and starts below 1.2",
+    ),
+    Claim(
+        says="(the ideal robot turns at every one of these commands)",
+        printed=_SPIN_09,
+        holds=lambda **n: n["ideal"] > 1,
+        meaning="the ideal robot turns at the smallest command of the table",
+    ),
+    Claim(
+        says="That is where the realistic run's turns spent their time, asking for less than the "
+        "robot needs for most of it, and one of them ran into the time limit",
+        printed=_TURNS_09,
+        holds=lambda **n: n["weak"] > n["turns"] / 2 and n["longest"] >= 29.5,
+        meaning="over half of the realistic turns' time asks for less than the dead band's edge, "
+        "and the longest turn lasts the 30 s time limit",
+    ),
+    Claim(
+        says="it takes a second or two instead of many, and ends within the tolerance all the same",
+        printed=_QUARTER_TURN_09,
+        holds=lambda slow, slow_error, fast, fast_error: (
+            fast < 2.5 and slow > 3 * fast and slow_error < 2 and fast_error < 2
+        ),
+        meaning="with a minimum command the quarter turn takes under 2.5 s, a third of the time "
+        "or less, both within 2 degrees",
+    ),
+]
+
+_GAPS_11 = (
+    rf"left_wheel_encoder_node/tick: \d+ ticks, intervals (?P<left_low>{_NUMBER}) to "
+    rf"(?P<left_high>{_NUMBER}) ms, (?P<left_gaps>\d+) gap\(s\)\n[^\n]*right_wheel_encoder_node/"
+    rf"tick: \d+ ticks, intervals (?P<right_low>{_NUMBER}) to (?P<right_high>{_NUMBER}) ms, "
+    r"(?P<right_gaps>\d+) gap\(s\)"
+)
+_DROPPED_11 = (
+    rf"(?P<dropped>\d+) messages taken out; stamp_gaps finds \(s\):\n  from (?P<start>{_NUMBER}) "
+    rf"to (?P<end>{_NUMBER}): (?P<silent>{_NUMBER}) ms of silence\n(?!  from)"
+)
+
+CLAIMS["11_to_the_robot"] = [
+    Claim(
+        says="simulated, far faster than real time: minutes of mission in seconds",
+        printed=rf"total time (?P<simulated>{_NUMBER}) s \(simulated\), run in "
+        rf"(?P<wall>{_NUMBER}) s",
+        holds=lambda simulated, wall: simulated > 60 and wall < simulated / 10,
+        meaning="a mission of over a minute runs at least 10 times faster than real time",
+    ),
+    Claim(
+        says="The walrus `:=` came in Python 3.8 itself: it parses, and the robot runs it.",
+        printed=r"walrus :=, new in Python 3\.(?P<minor>\d+) +parses as Python 3\.8",
+        holds=lambda minor: minor == 8,
+        meaning="the walrus, new in 3.8, parses as Python 3.8",
+    ),
+    Claim(
+        says="`match` and `except*` are syntax that Python 3.8 does not have: the check rejects "
+        "them",
+        printed=r"match, new in Python 3\.(?P<match>\d+) +rejected: [^\n]*\nexcept\*, new in "
+        r"Python 3\.(?P<star>\d+) +rejected: ",
+        holds=lambda match, star: match > 8 and star > 8,
+        meaning="match and except*, newer than 3.8, are rejected",
+    ),
+    Claim(
+        says="The last two parse, yet fail on the robot when they run",
+        printed=r"list\[float\] hint, new in Python 3\.(?P<hint>\d+) +parses as Python 3\.8\n"
+        r"str\.removesuffix, new in Python 3\.(?P<method>\d+) +parses as Python 3\.8",
+        holds=lambda hint, method: hint > 8 and method > 8,
+        meaning="the list[float] hint and str.removesuffix, newer than 3.8, parse as 3.8",
+    ),
+    Claim(
+        says='`required="true"` on the mission node',
+        printed=r'<node name="mission_node"[^>]*required="true"',
+        holds=lambda: True,
+        meaning="course.launch marks the mission node required",
+    ),
+    Claim(
+        says="What stays on the laptop: every duckielib module that is **not** in that list (the "
+        "simulator, the bags, the plots, the runner)",
+        printed=r"laptop only: (?P<modules>\d+) modules, in duckielib/bags, (?:duckielib/\w+, )*"
+        r"duckielib/plots, duckielib/sim, duckielib/tools\n",
+        holds=lambda modules: modules > 0,
+        meaning="the simulator, bags, plots and tools (the runner) stay on the laptop",
+    ),
+    Claim(
+        says="Here: the standard library (`math`, `os`), numpy, rospy, the message packages and "
+        "`duckielib.missions` (in the list above): all of them on the robot.",
+        printed=r"duckielib/missions\.py(?s:.*?)solution\.py imports:\n(?:  (?:import "
+        r"(?:math|os|rospy|numpy as np)|from (?:duckielib\.missions|duckietown_msgs\.msg|"
+        r"duckietown_msgs\.srv|std_msgs\.msg) import [^\n]+)\n)+(?!  )",
+        holds=lambda: True,
+        meaning="solution.py imports only math, os, numpy, rospy, message packages and "
+        "duckielib.missions, which is deployed",
+    ),
+    Claim(
+        says="Zero commands on shutdown, zero commands on an exception, a shutdown when a "
+        "callback fails, and the wheels driver's emergency stop when the encoders fall silent.",
+        printed=r"shutdown hook publishes zero commands(?s:.*?)stops the wheels, then lets"
+        r"(?s:.*?)the guard shuts the node down(?s:.*?)encoder silence:(?s:.*?)engages the "
+        r"wheels driver's emergency stop",
+        holds=lambda: True,
+        meaning="the guard's description lists the four cases",
+    ),
+    Claim(
+        says="the ticks stop, the robot does not",
+        printed=rf"without:\s+(?P<rolled>{_NUMBER}) cm after the ticks stopped, still moving",
+        holds=lambda rolled: rolled > 20,
+        meaning="without the watchdog the robot rolls on after the ticks stop",
+    ),
+    Claim(
+        says="A watchdog stops the **wheels**, it does not end the **node**",
+        printed=rf"with the watchdog, at {_NUMBER} s:\n  nodes running: [^\n]*cautious_driver"
+        rf"[^\n]*\n  the driver's last commands \(t, v\): \[\({_NUMBER}, 0\.0\), \({_NUMBER}, "
+        rf"0\.0\), \({_NUMBER}, 0\.0\)\]\n  the wheels' duty cycles \(left, right\): \[0\. 0\.\]",
+        holds=lambda: True,
+        meaning="with the watchdog the driver still runs, sending zeros, the wheels at 0",
+    ),
+    Claim(
+        says="The realistic encoders publish a little early or late, never much",
+        printed=_GAPS_11,
+        holds=lambda **n: all(
+            20 < n[f"{wheel}_low"] < 33.3 < n[f"{wheel}_high"] < 50 for wheel in ("left", "right")
+        ),
+        meaning="every interval between two ticks is between 20 and 50 ms",
+    ),
+    Claim(
+        says="No gap: the simulator never drops a message.",
+        printed=_GAPS_11,
+        holds=lambda **n: n["left_gaps"] == n["right_gaps"] == 0,
+        meaning="stamp_gaps finds no gap in either encoder's stream",
+    ),
+    Claim(
+        says="take out the left encoder's messages between 20.0 s and 20.8 s",
+        printed=_DROPPED_11,
+        holds=lambda dropped, start, end, silent: 19.9 < start < 20.0 and 20.8 < end < 20.9,
+        meaning="stamp_gaps finds one gap, from just before 20.0 s to just after 20.8 s",
+    ),
+    Claim(
+        says="a gap is a lone dot far above the dashed line, at the end of the silence",
+        printed=_DROPPED_11,
+        holds=lambda dropped, start, end, silent: silent > 10 * 50,
+        meaning="the gap's silence is over ten times the 50 ms limit",
+    ),
+]
+
+_WRAPS_10 = (
+    r"odometry: (?P<up>\d+) jumps up \(0 -> 2 pi\), (?P<down>\d+) jumps down \(2 pi -> 0\); "
+    rf"closest to east \(theta = 0\): {_NUMBER} deg\n\s+truth: (?P<true_up>\d+) jumps up "
+    r"\(0 -> 2 pi\), (?P<true_down>\d+) jumps down \(2 pi -> 0\); closest to east \(theta = 0\): "
+    rf"(?P<closest>{_NUMBER}) deg"
+)
+_WAIT_10 = r"wait:[^\n]*\n\s+every command 0\n\s+turned [-+]0 deg by odometry, [-+]0 deg really\n"
+_STATES_10 = (
+    rf"square:[^\n]*\n\s+driving at up to (?P<v>{_NUMBER}) m/s, \|omega\| {_NUMBER} to "
+    rf"(?P<steer>{_NUMBER}) rad/s; turning on the spot at up to (?P<spot>{_NUMBER}) rad/s\n"
+    rf"(?s:.*?)circle:[^\n]*\n\s+driving at up to {_NUMBER} m/s, \|omega\| "
+    rf"(?P<circle_low>{_NUMBER}) to {_NUMBER} rad/s\n\s+turned (?P<circle_odometry>{_NUMBER}) deg "
+    rf"by odometry, (?P<circle_truth>{_NUMBER}) deg really"
+)
+
+CLAIMS["10_bag_analysis"] = [
+    Claim(
+        says="Eight topics, all under the robot's namespace (`/duckiebot/`)",
+        printed=r"topics:(?:\s+/duckiebot/\S+\s+\d+ msgs\s+: \S+\n){8}(?!\s+/)",
+        holds=lambda: True,
+        meaning="the mission's bag holds eight topics, all under /duckiebot/",
+    ),
+    Claim(
+        says="about 30 per second per wheel",
+        printed=rf"left_wheel_encoder_node/tick: \d+ readings, (?P<left>{_NUMBER}) per second"
+        rf"[^\n]*\n[^\n]*right_wheel_encoder_node/tick: \d+ readings, (?P<right>{_NUMBER}) per "
+        "second",
+        holds=lambda left, right: 29 < left < 31 and 29 < right < 31,
+        meaning="each wheel's ticks come 29 to 31 times a second",
+    ),
+    Claim(
+        says="Far more wraps than the robot's turns across east, and all of them in the "
+        "odometry's θ!",
+        printed=_WRAPS_10,
+        holds=lambda up, down, true_up, true_down, closest: (
+            up + down >= 10 and true_up + true_down == 0
+        ),
+        meaning="the odometry's theta jumps 10 times or more, the truth's never",
+    ),
+    Claim(
+        says="The true heading never wraps on this run",
+        printed=_WRAPS_10,
+        holds=lambda up, down, true_up, true_down, closest: true_up + true_down == 0,
+        meaning="the true theta never jumps",
+    ),
+    Claim(
+        says="and it never comes close to θ = 0",
+        printed=_WRAPS_10,
+        holds=lambda up, down, true_up, true_down, closest: closest > 5,
+        meaning="the true heading stays more than 5 degrees from east",
+    ),
+    Claim(
+        says="during the stops both commands are 0 and x, y, θ stay flat",
+        printed=_WAIT_10 + "(?s:.*?)" + _WAIT_10 + "(?s:.*?)" + _WAIT_10,
+        holds=lambda: True,
+        meaning="in each of the three waits every command is 0 and neither heading turns",
+    ),
+    Claim(
+        says="the square is three legs driven forward (v > 0, with a small ω: the node steers) "
+        "with turns on the spot between them (v = 0, ω ≠ 0)",
+        printed=_STATES_10,
+        holds=lambda **n: n["v"] > 0 and 0 < n["steer"] < n["spot"] / 3,
+        meaning="in the square, driving steers with under a third of the turns' omega",
+    ),
+    Claim(
+        says="in the circle the commands turn all the time, and by odometry θ sweeps through a "
+        "whole turn",
+        printed=_STATES_10,
+        holds=lambda **n: n["circle_low"] > 0 and abs(n["circle_odometry"] + 360) < 20,
+        meaning="every circle command turns, and the odometry turns -360 degrees",
+    ),
+    Claim(
+        says="while on this realistic run the real robot, pressed against the wall, hardly turns "
+        "at all",
+        printed=_STATES_10,
+        holds=lambda **n: abs(n["circle_truth"]) < 60,
+        meaning="the real robot turns less than 60 degrees during the circle",
+    ),
+    Claim(
+        says="the dashed robot drift away from the real one on the realistic robot",
+        printed=rf"square: position gap\s+(?P<before>{_NUMBER}) ->\s+(?P<after>{_NUMBER}) cm",
+        holds=lambda before, after: after > before + 10,
+        meaning="odometry and truth part by more than 10 cm during the square",
+    ),
+    Claim(
+        says="It computes offline exactly what your odometry node computed live during the run, "
+        "so the two should agree",
+        printed=rf"largest distance between the two, pose by pose: (?P<mm>{_NUMBER}) mm",
+        holds=lambda mm: mm < 1,
+        meaning="the replayed odometry is within 1 mm of the live one",
+    ),
+    Claim(
+        says="(on this realistic run the truth never wraps at all)",
+        printed=_WRAPS_10,
+        holds=lambda up, down, true_up, true_down, closest: true_up + true_down == 0,
+        meaning="the true theta never jumps",
+    ),
+    Claim(
+        says="the calibrated robot replays your robot's ticks far closer than the realistic one "
+        "(a travel ratio near 1)",
+        printed=rf"realistic: simulated over real travel (?P<rl>{_NUMBER}) \(left\), "
+        rf"(?P<rr>{_NUMBER}) \(right\)[^\n]*\n\s*my_robot: simulated over real travel "
+        rf"(?P<ml>{_NUMBER}) \(left\), (?P<mr>{_NUMBER}) \(right\)",
+        holds=lambda rl, rr, ml, mr: (
+            abs(ml - 1) < 0.02 and abs(mr - 1) < 0.02 and min(abs(rl - 1), abs(rr - 1)) > 0.1
+        ),
+        meaning="the calibrated robot's travel ratios are within 2 % of 1, the realistic one's "
+        "over 10 % off",
+    ),
+    Claim(
+        says="yet its odometry still drifts",
+        printed=rf"my_robot\.json: {_NUMBER} s; ended {_NUMBER} cm from the start, odometry "
+        rf"(?P<drift>{_NUMBER}) cm from the truth",
+        holds=lambda drift: drift > 5,
+        meaning="on the calibrated robot the odometry still ends over 5 cm from the truth",
+    ),
+]
