@@ -79,7 +79,7 @@ class Recording:
         frames: the camera's frames, as (time, JPEG bytes), in time order.
         world: the mat to draw, or None to draw tiles under the poses, without walls.
         config: the robot's size, to draw it to scale.
-        title: what the run is, shown above the mat.
+        title: what the run is, shown beside the mat.
         camera_topic: the topic the frames came from.
     """
 

@@ -546,7 +546,7 @@ def write_animation(bag: Path, title: str, path: Path, frames: int = 100) -> Pat
 
     Args:
         bag: the run's bag.
-        title: what the run is, shown above the mat.
+        title: what the run is, shown beside the mat.
         path: the GIF (or MP4) to write.
         frames: how many frames (8 a second).
 
