@@ -11,7 +11,13 @@ import pytest
 from autograder.course import ROOT, assignments
 from autograder.grade import find_submissions, read_submission
 from duckielib.tools.cli import main
-from duckielib.tools.handin import HandinError, check_course, handin, run_notebook
+from duckielib.tools.handin import (
+    CourseCheck,
+    HandinError,
+    check_course,
+    handin,
+    run_notebook,
+)
 
 pytestmark = pytest.mark.notebook
 
@@ -29,6 +35,20 @@ def graded(cell, grade_id, *, test):
     return cell
 
 
+def answer(text, grade_id, points):
+    """A markdown cell as nbgrader marks an answer in words, graded by a person."""
+    cell = nbformat.v4.new_markdown_cell(text)
+    cell.metadata["nbgrader"] = {
+        "grade_id": grade_id,
+        "grade": True,
+        "solution": True,
+        "locked": False,
+        "points": points,
+        "schema_version": 3,
+    }
+    return cell
+
+
 def write_notebook(path, cells):
     notebook = nbformat.v4.new_notebook()
     notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3"}
@@ -38,7 +58,7 @@ def write_notebook(path, cells):
     return path
 
 
-def test_a_run_notes_every_cell_that_raised_and_each_tests_result(tmp_path):
+def test_a_run_notes_every_cell_that_raised_and_each_tests_result(tmp_path, capfd):
     code = nbformat.v4.new_code_cell
     path = write_notebook(
         tmp_path / "05_odometry" / "05_odometry.ipynb",
@@ -52,9 +72,15 @@ def test_a_run_notes_every_cell_that_raised_and_each_tests_result(tmp_path):
             code("# a demo\nprint(double(3))"),
             graded(code("assert math.pi > 3"), "test_pi", test=True),
             code("print(undefined_name)"),
+            answer("YOUR ANSWER HERE", "answer_speed", 2),
+            answer("0.2 m/s: faster and the robot overshoots its turns.", "answer_why", 2),
+            answer("  \n", "answer_exit", 1),
+            nbformat.v4.new_markdown_cell("YOUR ANSWER HERE"),  # not graded: not an answer
         ],
     )
     run = run_notebook(path)
+    # The kernel's connection is encrypted: it has no warning to print on the terminal.
+    assert "without encryption" not in "".join(capfd.readouterr())
     assert [(cell.number, cell.kind, cell.grade_id) for cell in run.raised] == [
         (4, "test", "test_double"),
         (5, "code", None),
@@ -69,6 +95,13 @@ def test_a_run_notes_every_cell_that_raised_and_each_tests_result(tmp_path):
     assert not run.clean
     assert run.summary().startswith(
         "05_odometry: 1 of 2 visible tests pass (to do: double); Run All stops at cell 4"
+    )
+    # The answers in words still as released (or empty), with their points, in order.
+    assert run.answers_left == {"answer_speed": 2, "answer_exit": 1}
+    assert CourseCheck(tmp_path, [run]).report().splitlines()[-1] == (
+        "Written answers left (3 points): 05_odometry answer_speed (2 points), 05_odometry "
+        "answer_exit (1 point). Write each in its YOUR ANSWER HERE cell (double-click it), "
+        "save, and hand in again."
     )
     # The notebook's file is left as it was: nothing ran in it.
     assert all(c.get("outputs", []) == [] for c in nbformat.read(path, 4).cells if "outputs" in c)
@@ -125,7 +158,9 @@ def test_duckie_handin_checks_each_notebook_and_zips_them_for_duckie_grade(tmp_p
     (course / "01_getting_started" / "notes.txt").write_text("not handed in")
     assert main(["handin", str(course), "-o", str(tmp_path / "ada.zip")]) == 0
     out = capsys.readouterr().out.splitlines()
-    assert out[0].startswith("Running your 3 saved notebooks from top to bottom")
+    assert out[0] == (
+        "Running your 3 notebooks from top to bottom as saved, as grading does (about 1 minute)..."
+    )
     assert out[1].startswith("01_getting_started: 1 of 1 visible tests pass; Run All runs to")
     assert out[2].startswith("03_frames: 4 of 4 visible tests pass; Run All runs to the end")
     assert out[3].startswith(
@@ -154,6 +189,31 @@ def test_duckie_handin_checks_each_notebook_and_zips_them_for_duckie_grade(tmp_p
         "04_kinematics",
     ]
     assert not list(course.rglob("*.bag")), "the check ran in a copy, not in the course"
+
+
+def test_duckie_handin_names_the_written_answers_left_and_prints_no_kernel_warning(tmp_path, capfd):
+    # Every check can pass while answers in words still read YOUR ANSWER HERE: points lost.
+    path = write_notebook(
+        tmp_path / "course" / "06_driving" / "06_driving.ipynb",
+        [
+            nbformat.v4.new_code_cell("speed = 0.2"),
+            answer("YOUR ANSWER HERE", "answer_speed", 2),
+            answer("The wheels stop: the node sends (0, 0) before it returns.", "answer_exit", 2),
+        ],
+    )
+    assert main(["handin", str(path.parent.parent), "-o", str(tmp_path / "ada.zip")]) == 0
+    out, err = capfd.readouterr()  # the kernels' own output too, not only the command's
+    lines = out.splitlines()
+    assert lines[0].endswith("(about 1 minute)...")
+    assert lines[1].startswith("06_driving: no graded test; Run All runs to the end (")
+    assert lines[2:] == [
+        "Every notebook runs from top to bottom and passes its visible tests.",
+        "Written answers left (2 points): 06_driving answer_speed (2 points). Write each in its "
+        "YOUR ANSWER HERE cell (double-click it), save, and hand in again.",
+        f"Wrote {tmp_path / 'ada.zip'} (1 notebook): hand in this file.",
+    ]
+    assert "without encryption" not in out + err
+    assert err == ""
 
 
 def test_handin_refuses_what_it_cannot_do_in_one_sentence(tmp_path, capsys):

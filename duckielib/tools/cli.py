@@ -202,12 +202,14 @@ def _export(args: argparse.Namespace) -> int:
 
 
 def _handin(args: argparse.Namespace) -> int:
-    from duckielib.tools.handin import handin, handin_notebooks
+    from duckielib.tools.handin import check_minutes, handin, handin_notebooks
 
     count = len(handin_notebooks(args.folder, args.output))
+    notebooks = f"{count} notebook" + ("" if count == 1 else "s")
+    minutes = check_minutes(count)
     print(
-        f"Running your {count} saved notebooks from top to bottom, as grading does "
-        "(about a minute)...",
+        f"Running your {notebooks} from top to bottom as saved, as grading does "
+        f"(about {minutes} minute{'' if minutes == 1 else 's'})...",
         flush=True,
     )
     check = handin(args.folder, args.output, progress=lambda run: print(run.summary(), flush=True))
@@ -219,7 +221,10 @@ def _handin(args: argparse.Namespace) -> int:
         )
     else:
         print("Every notebook runs from top to bottom and passes its visible tests.")
-    print(f"Wrote {args.output} ({count} notebooks): hand in this file.")
+    answers = check.answers_left()
+    if answers:
+        print(answers)
+    print(f"Wrote {args.output} ({notebooks}): hand in this file.")
     return 0
 
 
