@@ -1040,7 +1040,7 @@ CLAIMS["08_leds"] = [
 ]
 
 _REALISTIC_09 = (
-    rf"realistic: odometry {_NUMBER} cm and {_NUMBER} deg from the truth; really "
+    rf"realistic: odometry (?P<gap>{_NUMBER}) cm and {_NUMBER} deg from the truth; really "
     rf"(?P<home>{_NUMBER}) cm from the start; [^\n]*believed it was (?P<believed>{_NUMBER}) "
     rf"cm[^\n]*\n\s+after the square: heading (?P<odometry>{_NUMBER}) deg by odometry, "
     rf"(?P<truth>{_NUMBER}) deg really\n\s+the circle: (?P<across>{_NUMBER}) m across by "
@@ -1394,5 +1394,44 @@ CLAIMS["10_bag_analysis"] = [
         rf"(?P<drift>{_NUMBER}) cm from the truth",
         holds=lambda drift: drift > 5,
         meaning="on the calibrated robot the odometry still ends over 5 cm from the truth",
+    ),
+]
+
+CLAIMS["09_mission"] += [
+    Claim(
+        says="The node drives until its **odometry** says it is there, so the second gap can "
+        "never be much smaller than the first.",
+        printed=_REALISTIC_09,
+        holds=lambda **n: n["home"] >= n["gap"] - n["believed"] - 0.2,
+        meaning="the realistic robot ends at least as far from the start as its odometry is from "
+        "the truth, less what the odometry believes is left",
+    ),
+]
+
+CLAIMS["10_bag_analysis"] += [
+    Claim(
+        says="a virtual robot whose motors are weaker than the realistic one's",
+        printed=rf"calibration_dead_band: (?P<dead_band>{_NUMBER})(?s:.*?)realistic: simulated "
+        rf"over real travel (?P<left>{_NUMBER}) \(left\), (?P<right>{_NUMBER}) \(right\)",
+        holds=lambda dead_band, left, right: dead_band > 0.12 and left > 1.1 and right > 1.1,
+        meaning="the sample robot's dead band is wider than 0.12, and the realistic robot "
+        "travels over 10 % further on its commands",
+    ),
+]
+
+CLAIMS["11_to_the_robot"] += [
+    Claim(
+        says="Duckietown's base image with ROS Noetic, `dt-ros-commons`, tagged `daffy-arm64v8`",
+        printed=r"ARG ARCH=arm64v8\n\s*\d+\s+ARG DISTRO=daffy\n\s*\d+\s+ARG "
+        r"BASE_TAG=\$\{DISTRO\}-\$\{ARCH\}\n\s*\d+\s+ARG BASE_IMAGE=dt-ros-commons\n",
+        holds=lambda: True,
+        meaning="the Dockerfile's base image is dt-ros-commons, tagged daffy-arm64v8",
+    ),
+    Claim(
+        says="It comes last, so that a new solution rebuilds only this last layer",
+        printed=r"COPY \./deploy /code/course\n\s*\d+\s+ENV PYTHONPATH=/code/course[^\n]*\n"
+        r"\s*\d+\s+ENV DUCKIE_SOLUTION=/code/course/solution\.py\n(?!\s*\d+\s)",
+        holds=lambda: True,
+        meaning="COPY ./deploy comes after every other COPY and RUN, followed only by two ENVs",
     ),
 ]
