@@ -200,6 +200,22 @@ def test_a_right_solution_loads_after_the_tests_it_can_run(tmp_path, monkeypatch
     assert not visible.checking()
 
 
+def test_a_passed_check_is_not_run_again_until_a_notebook_changes(tmp_path, monkeypatch):
+    # Notebook 09 loads the same solution three times: the tests run once, until 05 is saved.
+    course = small_course(tmp_path / "course")
+    monkeypatch.chdir(course / "06_driving")
+    ran = []
+    monkeypatch.setattr(visible, "_run_notebook", lambda *args: ran.append(args[0].name))
+    load_solution("..", required=["delta_phi"])
+    load_solution("..", required=["delta_phi"])
+    assert ran == ["05_odometry.ipynb"]
+    monkeypatch.undo()
+    monkeypatch.chdir(course / "06_driving")
+    small_course(course, delta=ABSOLUTE_TICKS)  # the student saves a mistake into 05
+    with pytest.raises(SolutionError, match=r"^Fix notebook 05_odometry first: delta_phi"):
+        load_solution("..", required=["delta_phi"])
+
+
 def test_the_notebook_that_loads_tests_its_own_parts_itself(tmp_path, monkeypatch):
     course = small_course(tmp_path / "course", delta=ABSOLUTE_TICKS)
     monkeypatch.chdir(course / "05_odometry")
