@@ -62,8 +62,11 @@ COPIED = ("course", "duckielib", "robot_nodes", "constraints.txt")
 #: What never reaches students: the answers and hidden tests, the project's tests, the grader.
 WITHHELD = ("solutions", "tests", "autograder", ".ci")
 
-#: Text that marks a reference answer or a hidden test in the course's source notebooks.
-MARKERS = ("BEGIN SOLUTION", "END SOLUTION", "BEGIN HIDDEN TESTS", "END HIDDEN TESTS")
+#: A marker of a reference answer or a hidden test as nbgrader reads it: a line of its own (in
+#: a notebook's JSON, a string that starts with it). Code that finds the markers (the visible
+#: tests' runner cuts hidden regions out of the instructors' notebooks) names them inside a
+#: pattern, never at the start of a line.
+MARKER_LINE = re.compile(r'^[ \t]*"?### (BEGIN|END) (SOLUTION|HIDDEN TESTS)', re.M)
 
 #: What ``make run`` runs in the edition (after ``.venv/bin/``): the student's own notebooks
 #: drive the mission, since the edition has no reference solution.
@@ -328,7 +331,7 @@ def leaks(folder: Path) -> List[str]:
     """What in an edition's ``folder`` would give answers away, one sentence each.
 
     A file of a withheld folder (:data:`WITHHELD`), a gradebook, or a text that holds a
-    solution or hidden-test marker of the course's source notebooks (:data:`MARKERS`).
+    solution or hidden-test marker line of the course's source notebooks (:data:`MARKER_LINE`).
     """
     found = []
     for path in sorted(folder.rglob("*")):
@@ -342,7 +345,9 @@ def leaks(folder: Path) -> List[str]:
             found.append(f"{name} is a database, as nbgrader's gradebook is.")
         else:
             text = path.read_bytes().decode("utf-8", errors="replace")
-            found += [f"{name} holds '{marker}'." for marker in MARKERS if marker in text]
+            marker = MARKER_LINE.search(text)
+            if marker is not None:
+                found.append(f"{name} holds '{marker.group(0).strip().lstrip(chr(34))}'.")
     return found
 
 
