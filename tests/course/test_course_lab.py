@@ -19,6 +19,7 @@ import subprocess
 import time
 import urllib.error
 import urllib.request
+import warnings
 
 import nbformat
 import pytest
@@ -189,14 +190,22 @@ def run_all_in_the_browser(page, port, name):
     page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?reset&token={TOKEN}")
     idle = f"{SHOWN} .jp-Notebook-ExecutionIndicator[data-status='idle']"
     page.wait_for_selector(idle, timeout=60_000)
+    dialogs = []
     for _ in range(3):  # a click while the page is still settling can be lost: click again
-        page.locator(".lm-MenuBar-itemLabel", has_text="Run").click()
-        page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
         try:
+            page.locator(".lm-MenuBar-itemLabel", has_text="Run").click(timeout=20_000)
+            page.locator(".lm-Menu-itemLabel", has_text="Run All Cells").first.click()
             page.wait_for_function(STARTED, arg=PROMPTS, polling=POLL_MS, timeout=20_000)
             break
         except PlaywrightTimeout:
+            # A dialog JupyterLab opened in the way (a student would read it and close it):
+            # its words are kept, and said if Run All never begins.
+            dialogs += page.locator(".jp-Dialog").all_inner_texts()
             page.keyboard.press("Escape")
+    else:
+        pytest.fail(f"Run All of {name} never began; dialogs: {dialogs or 'none'}")
+    if dialogs:
+        warnings.warn(f"{name}: JupyterLab showed a dialog before Run All: {dialogs}", stacklevel=2)
     page.wait_for_function(FINISHED, arg=[PROMPTS, STDERR], polling=POLL_MS, timeout=180_000)
 
 
