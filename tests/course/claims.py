@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
-from typing import Callable, Dict, List, Mapping, Optional
+from typing import Callable, Dict, List, Mapping, Optional, Union
 
 __all__ = ["CLAIMS", "Claim", "check_claim", "markdown_text"]
 
@@ -31,7 +31,7 @@ class Claim:
         says: words of the notebook's markdown that make the claim, as written (spaces and
             line breaks may differ).
         printed: a regular expression with named groups, searched in everything the notebook's
-            code cells printed; each group is read as a number.
+            code cells printed; each group is read as a number (as text if it is none).
         holds: called with the groups' numbers as keyword arguments; true when the claim holds.
         meaning: the claim in a few words, for the failure message.
     """
@@ -57,6 +57,13 @@ def markdown_text(notebook: Mapping[str, object]) -> str:
     return _words("\n".join(parts))
 
 
+def _number(text: str) -> Union[float, str]:
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
 def check_claim(claim: Claim, markdown: str, printed: str) -> Optional[str]:
     """Why ``claim`` does not hold in a notebook's text and printouts, or None when it holds."""
     if _words(claim.says) not in _words(markdown):
@@ -64,9 +71,12 @@ def check_claim(claim: Claim, markdown: str, printed: str) -> Optional[str]:
     found = re.search(claim.printed, printed)
     if found is None:
         return f"nothing printed matches {claim.printed!r}, the numbers behind {claim.says!r}"
-    numbers = {name: float(value) for name, value in found.groupdict().items()}
+    numbers = {name: _number(value) for name, value in found.groupdict().items()}
     if not claim.holds(**numbers):
-        shown = ", ".join(f"{name} = {value:g}" for name, value in numbers.items())
+        shown = ", ".join(
+            f"{name} = {value:g}" if isinstance(value, float) else f"{name} = {value!r}"
+            for name, value in numbers.items()
+        )
         return f"{claim.says!r} ({claim.meaning}) does not hold: {shown}"
     return None
 
@@ -1433,5 +1443,27 @@ CLAIMS["11_to_the_robot"] += [
         r"\s*\d+\s+ENV DUCKIE_SOLUTION=/code/course/solution\.py\n(?!\s*\d+\s)",
         holds=lambda: True,
         meaning="COPY ./deploy comes after every other COPY and RUN, followed only by two ENVs",
+    ),
+]
+
+CLAIMS["02_ros_concepts"] = [
+    Claim(
+        says='"hello world 0" is missing',
+        printed=r"I heard: hello world (?P<first>\d+)",
+        holds=lambda first: first >= 1,
+        meaning="the listener's first message is not the talker's first",
+    ),
+    Claim(
+        says="The talker has sent its ten messages by now and returned",
+        printed=r"I heard: hello world (?P<last>\d+)\naverage rate: (?P<rate>[\d.]+)",
+        holds=lambda last, rate: last == 9 and rate == 2.0,
+        meaning="the tenth message, hello world 9, was heard, at 2 messages a second",
+    ),
+    Claim(
+        says="`rosnode list` no longer shows it, and `rostopic info` lists no publisher of chatter",
+        printed=r"\$ rosnode list\n(?P<nodes>(?:/.*\n)+)\s*Type: std_msgs/String\s+Publishers:\s+"
+        r"(?P<publishers>None)",
+        holds=lambda nodes, publishers: "talker" not in nodes and "listener" in nodes,
+        meaning="the finished talker is gone from the node list and from chatter's publishers",
     ),
 ]
