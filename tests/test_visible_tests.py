@@ -216,6 +216,18 @@ def test_a_passed_check_is_not_run_again_until_a_notebook_changes(tmp_path, monk
         load_solution("..", required=["delta_phi"])
 
 
+@pytest.mark.timeout(60)
+def test_a_fifo_among_the_notebooks_is_never_read(tmp_path, monkeypatch):
+    # A student's cell once made a FIFO named like a notebook: reading it blocks for ever.
+    course = small_course(tmp_path / "course", delta=ABSOLUTE_TICKS)
+    os.mkfifo(course / "05_odometry" / "zz_scratch.ipynb")
+    (course / "03_frames").mkdir()
+    os.mkfifo(course / "03_frames" / "03_frames.ipynb")
+    monkeypatch.chdir(course / "06_driving")
+    with pytest.raises(SolutionError, match=r"^Fix notebook 05_odometry first: delta_phi"):
+        load_solution("..", required=["delta_phi"])
+
+
 def test_the_notebook_that_loads_tests_its_own_parts_itself(tmp_path, monkeypatch):
     course = small_course(tmp_path / "course", delta=ABSOLUTE_TICKS)
     monkeypatch.chdir(course / "05_odometry")

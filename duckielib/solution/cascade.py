@@ -522,11 +522,17 @@ def _build(
 
 
 def _notebook_paths(folder: Path, through: Optional[str]) -> List[Path]:
-    """The notebooks of a course folder in course order, up to ``through`` if given."""
+    """The notebooks of a course folder in course order, up to ``through`` if given.
+
+    Only each assignment's own notebook (``05_odometry/05_odometry.ipynb``), and only a regular
+    file: anything else a student's folder holds is not read (a FIFO would block the reader).
+    """
     return [
         path
         for path in sorted(folder.glob("*/*.ipynb"))
-        if through is None or path.parent.name <= through
+        if path.stem == path.parent.name
+        and (through is None or path.parent.name <= through)
+        and path.is_file()
     ]
 
 

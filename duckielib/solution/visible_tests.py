@@ -138,7 +138,7 @@ def _stamps(folder: Path, before: Optional[str]) -> Tuple[Any, ...]:
     """What the check reads, as it is now: each notebook's path, size and time of change."""
     found: List[Any] = [str(folder.resolve())]
     for path in sorted(folder.glob("*/*.ipynb")):
-        if before is None or path.parent.name < before:
+        if path.stem == path.parent.name and (before is None or path.parent.name < before):
             with contextlib.suppress(OSError):
                 stat = path.stat()
                 found.append((path.name, stat.st_size, stat.st_mtime_ns))
@@ -193,6 +193,8 @@ def _run_notebook(
     path: Path, tests: Mapping[TestId, Function], provided: Mapping[str, Any]
 ) -> Optional[FailedTest]:
     """Run one notebook's tests of ``tests`` with what they need; the first that fails."""
+    if not path.is_file():  # not a FIFO, which would block the reader
+        return None
     try:
         cells = json.loads(path.read_text(encoding="utf-8"))["cells"]
     except (OSError, ValueError, KeyError, TypeError):
