@@ -37,6 +37,7 @@ import tarfile
 import tempfile
 import threading
 import time
+from concurrent.futures import CancelledError
 from contextlib import contextmanager
 from pathlib import Path, PurePosixPath
 from typing import Any, Callable, Dict, Iterator, List, Optional, Set, Tuple
@@ -682,8 +683,35 @@ def write_grades(out: Path, source: Path = ROOT / "solutions") -> List[StudentRe
     return results
 
 
+def _progress(writer: _Writer, total: int, per_student: float) -> str:
+    """The line that says how far the class's grading is, and how long is left."""
+    count = len(writer.results)
+    failed = sum(1 for item in writer.results.values() if item.problems)
+    return (
+        f"{count}/{total} graded ({failed} with problems), "
+        f"about {(total - count) * per_student:.0f} s left"
+    )
+
+
+def _stopped(student: str, why: str) -> StudentResult:
+    """A student whose grading stopped for ``why``, to be graded again by the next run."""
+    return StudentResult(
+        student,
+        problems=[f"Grading stopped: {why}; run duckie grade again to retry."],
+        complete=False,
+    )
+
+
+#: A student's work waiting to be graded: name, task, files, key, what was said of the files.
+_Item = Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]
+
+#: How many times a student's task is sent when the cluster drops it (a worker lost with the
+#: course's files): the second try finds them sent again.
+_ATTEMPTS = 3
+
+
 def _run(
-    pending: List[Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]],
+    pending: List[_Item],
     setup: _Course,
     writer: _Writer,
     jobs: int,
@@ -697,57 +725,57 @@ def _run(
 
     client, cluster = _client(max(1, jobs), scheduler)
     try:
-        blob = client.scatter(setup.blob, broadcast=True)
+        course = [client.scatter(setup.blob, broadcast=True)]
         workers = max(1, len(client.scheduler_info().get("workers", {})) or jobs)
         queue = iter(pending)
         futures: Dict[Any, Tuple[str, str, List[str], float]] = {}
+        items = {item[0]: item for item in pending}
+        attempts: Dict[str, int] = {}
 
-        def submit() -> bool:
-            item = next(queue, None)
+        def submit(item: Optional[_Item]) -> bool:
             if item is None:
                 return False
             student, task, files, key, said = item
+            attempts[student] = attempts.get(student, 0) + 1
             future = client.submit(
-                _grade_on_worker, task, files, setup.key, blob, key=f"grade-{student}-{key[:12]}",
-                pure=False,
+                _grade_on_worker, task, files, setup.key, course[0],
+                key=f"grade-{student}-{key[:12]}-{attempts[student]}", pure=False,
             )  # fmt: skip
             futures[future] = (student, key, said, time.monotonic())
             return True
 
         # A few students per worker in flight: their files are in memory until they are sent.
         for _ in range(2 * workers):
-            if not submit():
+            if not submit(next(queue, None)):
                 break
         flow = as_completed(list(futures))
-        for done, future in enumerate(flow, start=1):
+        done = 0
+        for future in flow:
             student, key, said, began = futures.pop(future)
             try:
                 answer = future.result()
                 result = from_data(answer["result"])
                 autograded = answer.get("autograded", {})
+            except CancelledError:
+                # The scheduler dropped the task: the course's files it needs were lost with a
+                # worker (scattered data cannot be made again). Send them again, and the student.
+                if attempts[student] < _ATTEMPTS:
+                    course[0] = client.scatter(setup.blob, broadcast=True)
+                    submit(items[student])
+                    flow.add(list(futures)[-1])
+                    continue
+                result, autograded = _stopped(student, "the cluster dropped its task"), {}
             except Exception as error:  # a worker lost for good, a task that raised
-                result = StudentResult(
-                    student,
-                    problems=[
-                        f"Grading stopped: {type(error).__name__}: {str(error)[:300]}; run "
-                        "duckie grade again to retry."
-                    ],
-                    complete=False,
-                )
-                autograded = {}
+                why = f"{type(error).__name__}: {str(error)[:300]}"
+                result, autograded = _stopped(student, why), {}
             result.problems = said + result.problems
             result.seconds = time.monotonic() - began
             writer.record(result, autograded, key)
-            if submit():
+            done += 1
+            if submit(next(queue, None)):
                 flow.add(list(futures)[-1])
             if progress is not None:
-                count = len(writer.results)
-                failed = sum(1 for item in writer.results.values() if item.problems)
-                per_student = (time.monotonic() - started) / done
-                progress(
-                    f"{count}/{total} graded ({failed} with problems), "
-                    f"about {(total - count) * per_student:.0f} s left"
-                )
+                progress(_progress(writer, total, (time.monotonic() - started) / done))
     finally:
         client.close()
         if cluster is not None:
