@@ -78,7 +78,7 @@ def find_submissions(folder: Path) -> Tuple[Dict[str, Path], List[str]]:
     """The students' folders and ``.zip`` files in ``folder``, and what was skipped (sentences).
 
     A student's entry that is a link, a FIFO or anything but a folder or a regular ``.zip``
-    file is skipped and said.
+    file is skipped and said, as is a hidden folder or zip (its name starts with a dot).
     """
     folder = Path(folder)
     if (folder / "submitted").is_dir():
@@ -88,9 +88,15 @@ def find_submissions(folder: Path) -> Tuple[Dict[str, Path], List[str]]:
     for entry in sorted(os.scandir(folder), key=lambda item: item.name):
         path = Path(entry.path)
         name = path.stem if path.suffix == ".zip" else entry.name
-        if name.startswith("."):
-            continue
         mode = entry.stat(follow_symlinks=False).st_mode
+        if name.startswith("."):
+            # A hidden file (.DS_Store) is no submission; a hidden folder or zip may be one.
+            if stat.S_ISDIR(mode) or path.suffix == ".zip":
+                skipped.append(
+                    f"{entry.name}: hidden (its name starts with a dot), so not graded; rename "
+                    "it without the dot to grade it"
+                )
+            continue
         if stat.S_ISDIR(mode) or (stat.S_ISREG(mode) and path.suffix == ".zip"):
             if name in found:
                 skipped.append(f"{entry.name}: {name} has a folder too; the folder is graded")
@@ -402,7 +408,7 @@ class _Writer:
             score = result.driving_score
             writer.writerow(
                 [
-                    result.student,
+                    _text_cell(result.student),
                     f"{result.total:g}",
                     f"{result.max_total:g}",
                     str(len(result.to_grade)),
@@ -413,11 +419,13 @@ class _Writer:
                     for name in driven
                 ]
                 + [
-                    " | ".join(result.problems),
-                    " | ".join(
-                        f"{name}: {reason}"
-                        for name, driving in result.missions.items()
-                        for reason in driving.reasons
+                    _text_cell(" | ".join(result.problems)),
+                    _text_cell(
+                        " | ".join(
+                            f"{name}: {reason}"
+                            for name, driving in result.missions.items()
+                            for reason in driving.reasons
+                        )
                     ),
                 ]
                 + [
@@ -428,6 +436,20 @@ class _Writer:
                 ]
             )
         write_atomic(self.out / "grades.csv", buffer.getvalue())
+
+
+#: How a spreadsheet's formula starts: a text cell that starts so is read as one (a student
+#: named ``=HYPERLINK(...)`` would be a link in the instructor's grade book).
+_FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+
+
+def _text_cell(text: str) -> str:
+    """A text of grades.csv as written, or as plain text if a spreadsheet would take a formula.
+
+    A leading apostrophe makes it plain text: spreadsheets read it as "text follows" and do
+    not show it.
+    """
+    return f"'{text}" if text.startswith(_FORMULA_STARTS) else text
 
 
 #: Said of an answer in words left as it was released.

@@ -81,3 +81,40 @@ def test_a_zip_is_read_in_memory_and_refused_when_it_points_outside(tmp_path):
     (tmp_path / "junk.zip").write_bytes(b"not a zip")
     with pytest.raises(UnsafeFile, match="it is not a readable zip"):
         unpack_zip(tmp_path / "junk.zip")
+
+
+def test_a_hidden_students_folder_or_zip_is_said_and_a_hidden_file_is_not(tmp_path):
+    from autograder.grade import find_submissions
+
+    (tmp_path / "ada").mkdir()
+    (tmp_path / ".hidden_student").mkdir()
+    (tmp_path / ".ben.zip").write_bytes(b"PK\x05\x06" + bytes(18))
+    (tmp_path / ".DS_Store").write_bytes(b"\0")
+    found, skipped = find_submissions(tmp_path)
+    assert sorted(found) == ["ada"]
+    assert skipped == [
+        ".ben.zip: hidden (its name starts with a dot), so not graded; rename it without the dot "
+        "to grade it",
+        ".hidden_student: hidden (its name starts with a dot), so not graded; rename it without "
+        "the dot to grade it",
+    ]
+
+
+def test_grades_csv_keeps_a_name_a_spreadsheet_would_take_for_a_formula_as_text(tmp_path):
+    import csv
+
+    from autograder.grade import _Writer
+    from autograder.results import StudentResult
+
+    writer = _Writer(out=tmp_path, names=[], cells={}, db_url="")
+    for name in ('=HYPERLINK("evil.invalid","click")', "+1", "ada", "o'neil"):
+        writer.results[name] = StudentResult(name, problems=["-x"] if name == "ada" else [])
+    writer.write_csv()
+    with (tmp_path / "grades.csv").open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [(row["student"], row["problems"]) for row in rows] == [
+        ("'+1", ""),
+        ('\'=HYPERLINK("evil.invalid","click")', ""),
+        ("ada", "'-x"),
+        ("o'neil", ""),
+    ]
