@@ -395,14 +395,7 @@ class Dependencies:
             notebooks changed.
         """
         folder = Path(source).resolve()
-        stamps = []
-        for path in _notebook_paths(folder, through):
-            try:
-                stat = path.stat()
-            except OSError:
-                continue
-            stamps.append((path.relative_to(folder).as_posix(), stat.st_mtime_ns, stat.st_size))
-        return _build(folder, through, tuple(stamps))
+        return _build(folder, through, notebook_stamps(folder, through))
 
     def own_functions(self, test: TestId) -> FrozenSet[Function]:
         """The graded functions a test is the own test of."""
@@ -519,6 +512,23 @@ def _build(
     """The dependencies of the course source ``folder`` (``stamps`` only keys the cache)."""
     del stamps
     return _Builder(folder, through).build()
+
+
+def notebook_stamps(
+    folder: Path, through: Optional[str] = None
+) -> Tuple[Tuple[str, int, int], ...]:
+    """The version of a course folder's notebooks (up to ``through``): path, time and size.
+
+    Equal stamps mean unchanged notebooks: what is worked out from them can be kept.
+    """
+    stamps = []
+    for path in _notebook_paths(folder, through):
+        try:
+            stat = path.stat()
+        except OSError:
+            continue
+        stamps.append((path.relative_to(folder).as_posix(), stat.st_mtime_ns, stat.st_size))
+    return tuple(stamps)
 
 
 def _notebook_paths(folder: Path, through: Optional[str]) -> List[Path]:

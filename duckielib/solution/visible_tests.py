@@ -37,7 +37,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Dict, Iterator, List, Mapping, Optional, Sequence, Set, Tuple, Union
 
-from duckielib.solution.cascade import Dependencies, Function, TestId, _parse, _uses
+from duckielib.solution.cascade import (
+    Dependencies,
+    Function,
+    TestId,
+    _parse,
+    _uses,
+    notebook_stamps,
+)
 from duckielib.solution.contract import CONTRACT
 
 __all__ = ["FailedTest", "TEST_SECONDS", "checking", "first_failing_test"]
@@ -119,30 +126,20 @@ def first_failing_test(
     """
     if not parts:
         return None
-    key = (*_stamps(Path(folder), before), before, tuple(sorted(parts.items())))
+    course = Path(folder).resolve()
+    key = (str(course), notebook_stamps(course, before), before, tuple(sorted(parts.items())))
     if key in _PASSED:
         return None
-    dependencies = Dependencies.from_source(folder, through=before)
+    dependencies = Dependencies.from_source(course, through=before)
     wanted = [
         function
         for function in _functions(dependencies, parts)
         if before is None or function.assignment < before
     ]
-    failed = _run(Path(folder).resolve(), solution, dependencies, wanted) if wanted else None
+    failed = _run(course, solution, dependencies, wanted) if wanted else None
     if failed is None:
         _PASSED.add(key)
     return failed
-
-
-def _stamps(folder: Path, before: Optional[str]) -> Tuple[Any, ...]:
-    """What the check reads, as it is now: each notebook's path, size and time of change."""
-    found: List[Any] = [str(folder.resolve())]
-    for path in sorted(folder.glob("*/*.ipynb")):
-        if path.stem == path.parent.name and (before is None or path.parent.name < before):
-            with contextlib.suppress(OSError):
-                stat = path.stat()
-                found.append((path.name, stat.st_size, stat.st_mtime_ns))
-    return tuple(found)
 
 
 def _functions(dependencies: Dependencies, parts: Mapping[str, str]) -> List[Function]:

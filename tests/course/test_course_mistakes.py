@@ -66,19 +66,34 @@ def loads_earlier_work(text):
     return "load_solution(" in text and all(isinstance(node, ast.Assign) for node in body)
 
 
+@contextlib.contextmanager
+def scratch_folder(prefix):
+    """A scratch folder; after it, the working folder, the environment and the modules as before.
+
+    A notebook may alias rospy and the message packages, or set VEHICLE_NAME: both are undone
+    so the tests that follow see the real modules and environment.
+    """
+    environment = dict(os.environ)
+    folder = Path.cwd()
+    scratch = tempfile.TemporaryDirectory(prefix=prefix)
+    try:
+        yield Path(scratch.name)
+    finally:
+        os.chdir(folder)
+        scratch.cleanup()
+        uninstall_modules()
+        os.environ.clear()
+        os.environ.update(environment)
+
+
 def failing_checks(name, replacements=None):
     """Run a notebook's graded and test cells; the test cells' grade ids that fail."""
     replacements = replacements or {}
     cells = [cell for cell in load_solution_nb(name)["cells"] if cell["cell_type"] == "code"]
     namespace: dict = {"__name__": "__main__"}
     failing = []
-    environment = dict(os.environ)
-    folder = Path.cwd()
-    scratch = tempfile.TemporaryDirectory(prefix="mistakes-")
-    try:
-        os.chdir(
-            copy_with(Path(scratch.name), name, replacements) if replacements else SOLUTIONS / name
-        )
+    with scratch_folder("mistakes-") as scratch:
+        os.chdir(copy_with(scratch, name, replacements) if replacements else SOLUTIONS / name)
         with contextlib.redirect_stdout(io.StringIO()):
             run_cell(source(cells[0]), f"<{name}[imports]>", namespace)
             for cell in cells[1:]:
@@ -92,14 +107,6 @@ def failing_checks(name, replacements=None):
                     run_cell(text, f"<{name}[{meta['grade_id']}]>", namespace)
                 except Exception:
                     failing.append(meta["grade_id"])
-    finally:
-        os.chdir(folder)
-        scratch.cleanup()
-        # A notebook may alias rospy and the message packages, or set VEHICLE_NAME: undo both
-        # so the tests that follow see the real modules and environment.
-        uninstall_modules()
-        os.environ.clear()
-        os.environ.update(environment)
     return failing
 
 
@@ -125,11 +132,8 @@ def given_cells(name, wanted, others=None):
     (``others`` as for :func:`copy_with`); test cells and the other given cells do not run.
     """
     namespace: dict = {"__name__": "__main__"}
-    environment = dict(os.environ)
-    folder = Path.cwd()
-    scratch = tempfile.TemporaryDirectory(prefix="given-")
-    try:
-        os.chdir(copy_with(Path(scratch.name), name, {}, others))
+    with scratch_folder("given-") as scratch:
+        os.chdir(copy_with(scratch, name, {}, others))
         cells = [cell for cell in load_solution_nb(name)["cells"] if cell["cell_type"] == "code"]
         with contextlib.redirect_stdout(io.StringIO()):
             for index, cell in enumerate(cells):
@@ -138,12 +142,6 @@ def given_cells(name, wanted, others=None):
                 if index == 0 or graded or cell["id"] in wanted or loads_earlier_work(text):
                     run_cell(text, f"<{name}[{cell['id']}]>", namespace)
         yield namespace
-    finally:
-        os.chdir(folder)
-        scratch.cleanup()
-        uninstall_modules()
-        os.environ.clear()
-        os.environ.update(environment)
 
 
 #: The given cells of 06_driving that define its runs: the constants, the driver, run_task with
