@@ -370,3 +370,25 @@ def _sample_bag():
     from duckielib.bags import sample_bag
 
     return sample_bag()
+
+
+def test_the_quick_starts_sample_output_is_what_the_mission_prints(tmp_path):
+    # The README shows what `make run` prints: each line it shows (`...` stands for the rest)
+    # is a line of the real printout, in the same order.
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    sample = re.search(r"and prints:\n\n```text\n(.*?)```", readme, re.S)
+    assert sample is not None
+    shown = [line for line in sample[1].splitlines() if line.strip() != "..."]
+    command = ["mission", "--out", str(tmp_path), "--no-animation", "--no-figure"]
+    result = subprocess.run(
+        [sys.executable, "-m", "duckielib.tools.cli", *command],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    printed = result.stdout.splitlines()
+    at = [printed.index(line) if line in printed else -1 for line in shown]
+    assert -1 not in at, f"the README shows lines the run does not print: {shown} vs {printed}"
+    assert at == sorted(at)
