@@ -198,10 +198,14 @@ def run_all_in_the_browser(page, port, name):
             page.wait_for_function(STARTED, arg=PROMPTS, polling=POLL_MS, timeout=20_000)
             break
         except PlaywrightTimeout:
-            # A dialog JupyterLab opened in the way (a student would read it and close it):
-            # its words are kept, and said if Run All never begins.
-            dialogs += page.locator(".jp-Dialog").all_inner_texts()
-            page.keyboard.press("Escape")
+            # A dialog JupyterLab opened in the way: its words are kept, and said if Run All
+            # never begins. A student takes the kernel it offers (Python 3), and closes others.
+            shown = page.locator(".jp-Dialog").all_inner_texts()
+            dialogs += shown
+            if any(text.startswith("Select Kernel") for text in shown):
+                page.locator(".jp-Dialog .jp-mod-accept").first.click()
+            else:
+                page.keyboard.press("Escape")
     else:
         pytest.fail(f"Run All of {name} never began; dialogs: {dialogs or 'none'}")
     if dialogs:
