@@ -40,6 +40,8 @@ from typing import Any, Dict, Iterator, List, Mapping, NoReturn, Optional, Seque
 NOT_RUN = "NotRun"
 #: Where the grader's findings travel back, in the notebook's metadata.
 METADATA_KEY = "duckie_grading"
+#: The module of the calls' kernel side, in a kernel (as ``autograder.calls`` names it).
+KERNEL_MODULE = "__duckie_calls__"
 #: The most output one cell keeps, in characters (a picture's data counts too).
 OUTPUT_LIMIT = 2_000_000
 #: The error a cell that ran out of time is given (as nbgrader gives it).
@@ -196,13 +198,40 @@ def _guarded_client_class():
                 changed = await self._run_hidden(GUARD_CHECK, cell_index)
                 if changed:
                     self.replaced[meta.get("grade_id", f"cell {cell_index + 1}")] = changed
+            if cell.get("metadata", {}).get(METADATA_KEY, {}).get("remote"):
+                await self._serve_test(cell, cell_index, meta.get("grade_id", ""))
+                return cell
             try:
                 return await super().async_execute_cell(cell, cell_index, execution_count, **kwargs)
             finally:
                 if getattr(self, "sandboxed", False):
                     _kill_kernel_copies(getattr(self.km.provisioner, "pid", None))
 
-        async def _run_hidden(self, source, index):
+        async def _serve_test(self, cell, index, grade_id):
+            """A test the grader runs on its side: answer its calls until it says it is done.
+
+            The cell's code never comes here (its source is empty); each call is run in the
+            kernel by the calls module (``autograder/calls.py``), and its answer, a text, goes
+            back to the grader as it is.
+            """
+            if not getattr(self, "calls_ready", False):
+                self.calls_ready = True
+                await self._run_hidden(_calls_setup(), index, text=True)
+            self.channel.say({"test": grade_id})
+            while True:
+                message = self.channel.hear()
+                if message is None or "end" in message:
+                    break
+                code = f"__import__('sys').modules[{KERNEL_MODULE!r}].answer({message['call']!r})"
+                answer = await self._run_hidden(code, index, text=True)
+                if answer is None:
+                    answer = json.dumps({"broken": _no_answer(self.last_probe)})
+                self.channel.say({"answer": answer})
+            cell.outputs = []
+            self.code_cells_executed += 1
+            cell.execution_count = self.code_cells_executed
+
+        async def _run_hidden(self, source, index, text=False):
             """Run ``source`` in the kernel without a cell of its own; its value, if a list."""
             real = self.nb.cells[index]
             probe = nbformat.v4.new_code_cell(source)
@@ -210,16 +239,65 @@ def _guarded_client_class():
                 await super().async_execute_cell(probe, index, store_history=False)
             finally:
                 self.nb.cells[index] = real  # nbclient puts the executed cell at the index
+            self.last_probe = probe
             for output in probe.get("outputs", []):
+                if output.get("output_type") == "execute_result" and text:
+                    try:
+                        value = ast.literal_eval(output["data"].get("text/plain", ""))
+                    except (ValueError, SyntaxError, MemoryError, RecursionError):
+                        return None
+                    return value if isinstance(value, str) else None
                 if output.get("output_type") == "execute_result":
                     try:
                         value = ast.literal_eval(output["data"].get("text/plain", ""))
                     except (ValueError, SyntaxError):
                         return []
                     return [str(item) for item in value] if isinstance(value, list) else []
-            return []
+            return None if text else []
 
     return GuardedClient
+
+
+def _calls_setup() -> str:
+    """The code that makes the calls module (``calls.py``, next to this file) in a kernel."""
+    source = (Path(__file__).resolve().parent / "calls.py").read_text(encoding="utf-8")
+    return (
+        "def _duckie_calls(source):\n"
+        "    import sys, types\n"
+        f"    module = types.ModuleType({KERNEL_MODULE!r})\n"
+        f"    module.__file__ = {KERNEL_MODULE!r}\n"
+        f"    sys.modules[{KERNEL_MODULE!r}] = module\n"
+        f"    exec(compile(source, {KERNEL_MODULE!r}, 'exec'), module.__dict__)\n"
+        f"_duckie_calls({source!r})\n"
+        "del _duckie_calls\n"
+    )
+
+
+def _no_answer(cell: Any) -> str:
+    """Why the kernel gave no answer to a call: the error its probe cell ended with."""
+    for output in getattr(cell, "outputs", []) or []:
+        if output.get("output_type") == "error":
+            if output.get("ename") == "CellTimeoutError":
+                return "the student's code ran out of time"
+            return f"the kernel gave no answer ({output.get('ename')})"
+    return "the kernel gave no answer"
+
+
+class Channel:
+    """The server's end of the conversation with the grader during remote tests."""
+
+    def __init__(self, given: Any, answer: Any) -> None:
+        self.given, self.answer = given, answer
+
+    def say(self, message: Dict[str, Any]) -> None:
+        """Send ``message`` to the grader."""
+        self.answer.write(frame(json.dumps(message).encode("utf-8")))
+        self.answer.flush()
+
+    def hear(self) -> Optional[Dict[str, Any]]:
+        """The grader's next message, or None when it has closed the pipe."""
+        data = read_frame(self.given)
+        return None if data is None else json.loads(data)
 
 
 def _record_reply_error(cell, execute_reply, **_):
@@ -839,6 +917,7 @@ def _execute(
     cell_seconds: int,
     zygote: Optional[Zygote],
     sandboxed: bool = False,
+    channel: Optional[Channel] = None,
 ) -> None:
     """Run every cell of ``notebook`` in a new kernel working in ``folder``; note the problems.
 
@@ -867,6 +946,7 @@ def _execute(
     )
     executor.replaced = {}
     executor.sandboxed = sandboxed
+    executor.channel = channel
     problems = []
     try:
         executor.execute()
@@ -1013,15 +1093,18 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
 
     given, answer = _private_streams()
     keep = [1, os.getpid()] + ([zygote.pid] if zygote is not None else [])
+    channel = Channel(given, answer)
     while True:
         request = read_frame(given)
         if request is None:
             break
         try:
             message = json.loads(request)
+            if "notebook" not in message:  # a late word of a test the grader gave up on
+                continue
             notebook = nbformat.reads(message["notebook"], as_version=4)
             folder = str(Path(message["folder"]).absolute())
-            _execute(notebook, folder, cell_seconds, zygote, sandboxed)
+            _execute(notebook, folder, cell_seconds, zygote, sandboxed, channel)
             reply = {"notebook": nbformat.writes(notebook)}
         except Exception as error:  # the grader reports it for this notebook
             reply = {"problem": f"could not be run: {type(error).__name__}: {error}"}

@@ -25,7 +25,7 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, List, Optional, Sequence, Tuple
 
 from duckielib.errors import DuckielibError
 
@@ -106,7 +106,10 @@ def _readonly_paths() -> List[str]:
 
     paths = ["/usr", "/etc", sys.prefix, sys.base_prefix]
     library = Path(duckielib.__file__).resolve().parent
-    paths += [str(library), str(Path(__file__).resolve().parent), str(PROJECT)]
+    # Of the grader, only what runs in the sandbox: the notebooks' runner and the calls' kernel
+    # side (not the scoring code, the tests' data or the gradebook's handling).
+    grader = Path(__file__).resolve().parent
+    paths += [str(library), str(grader / "execute.py"), str(grader / "calls.py"), str(PROJECT)]
     real_python = Path(sys.executable).resolve().parent.parent
     paths.append(str(real_python))
     unique: List[str] = []
@@ -134,6 +137,7 @@ def sandboxed_command(
     limits: Limits,
     env: Optional[Dict[str, str]] = None,
     course: Optional[Path] = None,
+    shared: Optional[Tuple[Path, str]] = None,
 ) -> List[str]:
     """The command line that runs ``command`` in a sandbox whose only writable folder is ``folder``.
 
@@ -148,6 +152,8 @@ def sandboxed_command(
             ``folder``'s name), so a notebook can load the student's other notebooks from
             ``..`` as it does in JupyterLab. When it is ``folder`` itself, all of it is
             writable at ``/course``, the working folder (to run every notebook in turn).
+        shared: a folder of the grader's and where the sandbox sees it, read-only: files the
+            grader's tests hand to the student's code (:mod:`autograder.calls`).
     """
     bwrap = shutil.which("bwrap")
     if bwrap is None:
@@ -196,6 +202,8 @@ def sandboxed_command(
         inside = f"{COURSE}/{Path(folder).name}"
     if course is not None:
         args += ["--ro-bind", str(course), COURSE]
+    if shared is not None:
+        args += ["--ro-bind", str(shared[0]), shared[1]]
     args += [
         "--bind", str(folder), inside,
         "--chdir", inside,

@@ -42,6 +42,9 @@ UNIT_MARGIN_S = 300
 SKIPPED = ("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
 
 _EXECUTE = Path(__file__).resolve().parent / "execute.py"
+#: Where the folder of files the grader's tests hand to the student's code appears (read-only)
+#: in the sandbox.
+SHARED_INSIDE = "/grader"
 
 
 def unit_seconds(task: Dict[str, Any]) -> float:
@@ -132,19 +135,42 @@ def _sandboxed_execute_class(unit: _Unit):
     import nbformat
     from nbgrader.preprocessors import Execute
 
-    from autograder.execute import METADATA_KEY, mark_not_run
+    from autograder.execute import METADATA_KEY, NOT_RUN, mark_not_run
 
     class SandboxedExecute(Execute):
         def preprocess(self, nb, resources):
             name = resources["nbgrader"]["assignment"]
             began = time.monotonic()
-            text, problem = unit.server.run(name, nbformat.writes(nb))
+            sent, tests = _remote_tests(nb)
+            run = _TestsHere(unit, nb.cells)
+            text, problem = unit.server.run(name, nbformat.writes(sent), run.test)
             executed = None
             if text is not None:
                 try:
                     executed = nbformat.reads(text, as_version=4)
+                    if len(executed.cells) != len(nb.cells):
+                        raise ValueError("cells added or lost")
                 except Exception:  # damaged: the notebook's run is not trusted
-                    problem = "answered with something that is not a notebook"
+                    executed = None
+                    problem = "answered with something that is not the notebook sent"
+            if executed is not None:
+                for index, grade_id in tests.items():
+                    cell = executed.cells[index]
+                    cell.source = nb.cells[index].source
+                    cell.metadata.pop(METADATA_KEY, None)
+                    ran = run.outputs.get(grade_id)
+                    cell.outputs = (
+                        [nbformat.from_dict(out) for out in ran]
+                        if ran is not None
+                        else [
+                            nbformat.v4.new_output(
+                                "error",
+                                ename=NOT_RUN,
+                                evalue=_NOT_RUN_TEST,
+                                traceback=[_NOT_RUN_TEST],
+                            )
+                        ]
+                    )
             unit.timings["notebooks"] += time.monotonic() - began
             unit.timings[f"notebook:{name}"] = time.monotonic() - began
             if executed is None:
@@ -158,6 +184,74 @@ def _sandboxed_execute_class(unit: _Unit):
             return executed, resources
 
     return SandboxedExecute
+
+
+_NOT_RUN_TEST = "This test did not run: the notebook's kernel stopped before it."
+
+
+def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
+    """The notebook to send to the sandbox: each test the grader runs on its side left empty.
+
+    Returns:
+        The notebook to send, and ``{cell index: grade_id}`` of the tests left empty there
+        (every test cell but :data:`autograder.calls.KERNEL_TESTS`).
+    """
+    import copy
+
+    from autograder.calls import KERNEL_TESTS
+    from autograder.execute import METADATA_KEY
+
+    sent = copy.deepcopy(notebook)
+    tests: Dict[int, str] = {}
+    for index, cell in enumerate(sent.cells):
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        grade_id = meta.get("grade_id", "")
+        if cell.cell_type != "code" or not meta.get("grade") or meta.get("solution"):
+            continue
+        if grade_id in KERNEL_TESTS or grade_id in tests.values():
+            continue
+        cell.source = ""
+        cell.metadata[METADATA_KEY] = {"remote": True}
+        tests[index] = grade_id
+    return sent, tests
+
+
+class _TestsHere:
+    """Runs a notebook's tests in the unit's process, as the sandbox reaches each of them."""
+
+    def __init__(self, unit: Any, cells: List[Any]) -> None:
+        self.unit = unit
+        self.cells = cells
+        self.sources = {
+            cell.metadata.get("nbgrader", {}).get("grade_id"): cell.source
+            for cell in cells
+            if cell.cell_type == "code"
+        }
+        self.space: Optional[Dict[str, Any]] = None
+        self.outputs: Dict[str, List[Dict[str, Any]]] = {}
+
+    def test(self, grade_id: str, ask: Any) -> None:
+        from autograder.calls import Link, prelude, run_test
+
+        if self.space is None:
+            self.space = prelude(self.cells)
+        seconds = self.unit.limits.cell_seconds
+        until = time.monotonic() + seconds
+
+        def send(request: Dict[str, Any]) -> str:
+            return ask(json.dumps(request), until, seconds)
+
+        paths = {str(self.unit.shared): SHARED_INSIDE} if self.unit.use_sandbox else {}
+        link = Link(send, paths)
+        saved = tempfile.tempdir
+        tempfile.tempdir = str(self.unit.shared)
+        try:
+            self.outputs[grade_id] = run_test(
+                self.sources.get(grade_id, ""), grade_id, self.space, link
+            )
+        finally:
+            tempfile.tempdir = saved
+        self.unit.timings["calls"] = self.unit.timings.get("calls", 0) + link.calls
 
 
 def raised_outside_tests(
@@ -230,8 +324,9 @@ class _Server:
     only: the sandbox is killed and a new one serves the next notebook.
     """
 
-    def __init__(self, folder: Path, limits: Any, use_sandbox: bool) -> None:
+    def __init__(self, folder: Path, limits: Any, use_sandbox: bool, shared: Path) -> None:
         self.folder = folder
+        self.shared = shared
         self.limits = limits
         self.use_sandbox = use_sandbox
         self.process: Optional[subprocess.Popen] = None
@@ -243,7 +338,11 @@ class _Server:
         command = [sys.executable, str(_EXECUTE), "--serve", str(self.limits.cell_seconds)]
         if self.use_sandbox:
             command = sandboxed_command(
-                [*command, "--sandboxed"], self.folder, self.limits, course=self.folder
+                [*command, "--sandboxed"],
+                self.folder,
+                self.limits,
+                course=self.folder,
+                shared=(self.shared, SHARED_INSIDE),
             )
         self.errors = tempfile.TemporaryFile()  # noqa: SIM115 - open for the sandbox's life
         return subprocess.Popen(
@@ -255,8 +354,19 @@ class _Server:
             start_new_session=True,
         )
 
-    def run(self, name: str, text: str) -> Tuple[Optional[str], str]:
-        """Run notebook ``name`` (its folder's name); its executed text, or None and why."""
+    def run(  # noqa: PLR0911, PLR0915 - the conversation with the sandbox, in one place
+        self, name: str, text: str, tests: Any = None
+    ) -> Tuple[Optional[str], str]:
+        """Run notebook ``name`` (its folder's name); its executed text, or None and why.
+
+        Args:
+            name: the notebook's folder.
+            text: the notebook to run.
+            tests: called as ``tests(grade_id, ask)`` when the run reaches a test the grader
+                runs on its side; ``ask(request, until, seconds)`` sends a call to the kernel
+                and returns its answer (a text).
+        """
+        from autograder.calls import Abandon, CallsBroken
         from autograder.execute import frame
 
         seconds = self.limits.submission_seconds
@@ -264,13 +374,54 @@ class _Server:
         if self.process is None:
             self.process = self._start()
         request = frame(json.dumps({"folder": name, "notebook": text}).encode("utf-8"))
+        final: List[Dict[str, Any]] = []
+
+        def ask(call: str, until: float, cell_seconds: int) -> str:
+            if final:
+                raise CallsBroken("the notebook's kernel had stopped")
+            try:
+                _write_all(self.process.stdin, frame(json.dumps({"call": call}).encode()), deadline)
+                while True:
+                    got = self._reply(min(until, deadline))
+                    if "answer" in got:
+                        return str(got["answer"])
+                    if "notebook" in got or "problem" in got:
+                        final.append(got)
+                        raise CallsBroken("the notebook's kernel stopped during the test")
+            except TimeoutError:
+                if time.monotonic() < deadline:
+                    raise CallsBroken(
+                        f"the test ran out of the {cell_seconds} s a cell may take"
+                    ) from None
+                raise Abandon("time") from None
+            except (OSError, EOFError, ValueError):
+                raise Abandon("stopped") from None
+
         try:
             _write_all(self.process.stdin, request, deadline)
-            size = int.from_bytes(_read_exact(self.process.stdout, 8, deadline), "big")
-            if size > self.limits.output_bytes:
+            while True:
+                reply = self._reply(deadline)
+                if "test" in reply and tests is not None:
+                    tests(str(reply["test"]), ask)
+                    if final:
+                        reply = final[0]
+                        break
+                    _write_all(self.process.stdin, frame(b'{"end": true}'), deadline)
+                elif "answer" not in reply and "test" not in reply:
+                    break
+        except _TooMuch as too_much:
+            self.stop()
+            return None, f"answered with {too_much} bytes, more than the grader reads"
+        except Abandon as abandon:
+            if str(abandon) != "time":
+                why = self._last_words() or "stopped with no output"
                 self.stop()
-                return None, f"answered with {size} bytes, more than the grader reads"
-            reply = json.loads(_read_exact(self.process.stdout, size, deadline))
+                return None, why
+            self.stop()
+            return None, (
+                f"ran out of its {seconds} s (all cells and the kernel's start); the cells "
+                "after that never ran"
+            )
         except TimeoutError:
             self.stop()
             return None, (
@@ -284,6 +435,18 @@ class _Server:
         if "notebook" not in reply:
             return None, str(reply.get("problem", "gave no notebook"))[:500]
         return str(reply["notebook"]), ""
+
+    def _reply(self, deadline: float) -> Dict[str, Any]:
+        """The sandbox's next message; TimeoutError, EOFError, ValueError or _TooMuch."""
+        assert self.process is not None
+        assert self.process.stdout is not None
+        size = int.from_bytes(_read_exact(self.process.stdout, 8, deadline), "big")
+        if size > self.limits.output_bytes:
+            raise _TooMuch(size)
+        reply = json.loads(_read_exact(self.process.stdout, size, deadline))
+        if not isinstance(reply, dict):
+            raise ValueError("not a message")
+        return reply
 
     def _last_words(self) -> str:
         if self.errors is None:
@@ -306,6 +469,10 @@ class _Server:
             self.process.stdout.close()
         self.errors.close()
         self.process = self.errors = None
+
+
+class _TooMuch(Exception):
+    """The sandbox sent a message larger than the grader reads."""
 
 
 def _write_all(stream: Any, data: bytes, deadline: float) -> None:
@@ -367,7 +534,8 @@ class _Unit:
         self.root = self.folder / "nbgrader"
         self.sandboxes = self.folder / "sandboxes"
         self.export = self.folder / "export"
-        self.server = _Server(self.sandboxes, self.limits, self.use_sandbox)
+        self.shared = self.folder / "shared"
+        self.server = _Server(self.sandboxes, self.limits, self.use_sandbox, self.shared)
 
     def hand_in(self, name: str, aside: List[str]) -> bool:
         """Repair one notebook and lay it out for nbgrader, the sandbox and the export."""
@@ -403,6 +571,8 @@ class _Unit:
         self.root.mkdir()
         self.sandboxes.mkdir()
         self.export.mkdir()
+        self.shared.mkdir()
+        self.shared.chmod(0o755)
         shutil.copy(self.course_dir / "gradebook.db", self.root / "gradebook.db")
         config = nbgrader_config(
             root=self.root,

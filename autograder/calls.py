@@ -1,0 +1,630 @@
+"""The student's functions, called from the grader: tests whose verdict no student code can reach.
+
+A test cell of a graded notebook does not run in the student's kernel. The grader runs it in
+its own process (:func:`run_test`), in a namespace of its own: the notebook's imports, done by
+the grader, and the test's own code. Each name the test needs from the student (``delta_phi``,
+``WheelPairing``) is a :class:`Remote`: calling it, or reading an attribute of what it returned,
+sends a request to the kernel in the sandbox, which does only that (``delta_phi(42, 42, 135)``)
+and answers with the result as plain data. The grader decodes the answer strictly
+(:func:`decode`: numbers, strings, bytes, lists, tuples, dicts, sets, numpy arrays of plain
+dtypes; anything else stays in the kernel and is named by a handle) and compares it with what
+the test expects, in its own process. The test's code, its expected values and its verdict
+never enter a process that runs student code: the kernel sees only the inputs it is called with.
+
+What the kernel answers is the student's answer, whatever the student's code did to the kernel
+(an AST transformer, a patched ``math.isclose``, a forged reply): the grader trusts none of it
+beyond its value. A handle compares equal only to itself, so a student's object cannot claim to
+equal the expected value (the expected value is never sent to it).
+
+This file is also the kernel's side: the sandbox's server runs its source in each kernel as a
+module of its own (:data:`KERNEL_MODULE`), and calls :func:`answer` there. It imports nothing
+of the grader.
+
+A few tests run a robot (a node, a mission) and stay in the kernel (:data:`KERNEL_TESTS`).
+"""
+
+from __future__ import annotations
+
+import base64
+import builtins
+import json
+import re
+import sys
+from typing import Any, Callable, Dict, List, Optional
+
+#: The tests that still run in the student's kernel: three run the student's nodes on a robot
+#: simulated in the same process, two set the kernel's environment variables (VEHICLE_NAME) for
+#: the student's code to read (see the README's grading section).
+KERNEL_TESTS = frozenset(
+    {
+        "test_light_service_node",
+        "test_mission_node",
+        "test_mission_closure",
+        "test_robot_topic",
+        "test_move_topic",
+    }
+)
+#: The module the kernel's side lives in, in the kernel.
+KERNEL_MODULE = "__duckie_calls__"
+#: How deep a value may nest (lists in lists ...).
+MAX_DEPTH = 64
+#: The most digits an integer may have.
+MAX_DIGITS = 4300
+#: The most items ``iter`` reads from a student's object.
+MAX_ITEMS = 1_000_000
+#: How much of a student object's ``repr`` comes back, in characters.
+MAX_TEXT = 2000
+#: The numpy dtypes an array may have, as ``dtype.str`` (little-endian, plain numbers).
+DTYPES = frozenset(
+    {"|b1", "|i1", "<i2", "<i4", "<i8", "|u1", "<u2", "<u4", "<u8", "<f2", "<f4", "<f8",
+     "<c8", "<c16"}
+)  # fmt: skip
+
+
+_INTEGER = re.compile(rf"-?[0-9]{{1,{MAX_DIGITS}}}\Z")
+
+
+class DecodeError(ValueError):
+    """The kernel answered with something that is not plain data in the expected form."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Both sides: plain data as JSON.
+
+
+def encode(  # noqa: PLR0911, PLR0912 - one branch per kind of value
+    value: Any, keep: Callable[[Any], List[Any]], depth: int = 0
+) -> Any:
+    """``value`` as JSON-ready data; what is not plain data becomes ``keep(value)`` (a handle)."""
+    if depth > MAX_DEPTH:
+        raise ValueError("the value nests too deeply")
+    np = sys.modules.get("numpy")
+    kind = type(value)
+    if value is None:
+        return ["n"]
+    if kind is bool:
+        return ["b", value]
+    if kind is int:
+        return ["i", str(value)]
+    if kind is float:
+        return ["f", repr(value)]
+    if kind is complex:
+        return ["c", repr(value.real), repr(value.imag)]
+    if kind is str:
+        return ["s", value]
+    if kind in (bytes, bytearray):
+        return ["y", base64.b64encode(bytes(value)).decode("ascii")]
+    plain = np is not None and isinstance(value, (np.ndarray, np.generic))
+    if plain and value.dtype.newbyteorder("<").str in DTYPES:
+        array = np.ascontiguousarray(value, dtype=value.dtype.newbyteorder("<"))
+        data = base64.b64encode(array.tobytes()).decode("ascii")
+        if isinstance(value, np.generic):  # a numpy number keeps its type (np.float64)
+            return ["g", array.dtype.str, data]
+        return ["a", array.dtype.str, list(array.shape), data]
+    if isinstance(value, (list, tuple)):
+        tag = "l" if isinstance(value, list) else "t"
+        return [tag, [encode(item, keep, depth + 1) for item in value]]
+    if isinstance(value, dict):
+        return ["d", [[encode(k, keep, depth + 1), encode(v, keep, depth + 1)]
+                      for k, v in value.items()]]  # fmt: skip
+    if isinstance(value, (set, frozenset)):
+        return ["e", [encode(item, keep, depth + 1) for item in value]]
+    return keep(value)
+
+
+def decode(  # noqa: PLR0911, PLR0912 - one branch per kind of value
+    data: Any, handle: Callable[[int, str], Any], depth: int = 0
+) -> Any:
+    """The value ``data`` (from :func:`encode`) stands for, checked at every step.
+
+    Args:
+        data: what ``json.loads`` gave.
+        handle: turns ``(number, type name)`` into the object a handle stands for.
+        depth: how deep ``data`` lies in the value being decoded.
+
+    Raises:
+        DecodeError: ``data`` is not in the form :func:`encode` gives.
+    """
+    if depth > MAX_DEPTH:
+        raise DecodeError("the value nests too deeply")
+    if not isinstance(data, list) or not data or not isinstance(data[0], str):
+        raise DecodeError("a value is not tagged")
+    tag, rest = data[0], data[1:]
+    try:
+        if tag == "n" and not rest:
+            return None
+        if tag == "b" and len(rest) == 1 and type(rest[0]) is bool:
+            return rest[0]
+        if tag == "i" and len(rest) == 1 and type(rest[0]) is str and _INTEGER.match(rest[0]):
+            return int(rest[0])
+        if tag == "f" and len(rest) == 1 and type(rest[0]) is str and len(rest[0]) <= 40:
+            return float(rest[0])
+        if tag == "c" and len(rest) == 2 and all(type(p) is str and len(p) <= 40 for p in rest):
+            return complex(float(rest[0]), float(rest[1]))
+        if tag == "s" and len(rest) == 1 and type(rest[0]) is str:
+            return str(rest[0])
+        if tag == "y" and len(rest) == 1 and type(rest[0]) is str:
+            return base64.b64decode(rest[0].encode("ascii"), validate=True)
+        if tag in ("l", "t", "e") and len(rest) == 1 and type(rest[0]) is list:
+            items = [decode(item, handle, depth + 1) for item in rest[0]]
+            return {"l": list, "t": tuple, "e": set}[tag](items)
+        if tag == "d" and len(rest) == 1 and type(rest[0]) is list:
+            pairs = {}
+            for pair in rest[0]:
+                if type(pair) is not list or len(pair) != 2:
+                    raise DecodeError("a dict's item is not a pair")
+                pairs[decode(pair[0], handle, depth + 1)] = decode(pair[1], handle, depth + 1)
+            return pairs
+        if tag == "a" and len(rest) == 3:
+            return _decode_array(*rest)
+        if tag == "g" and len(rest) == 2:
+            return _decode_array(rest[0], [], rest[1])[()]
+        if tag == "h" and len(rest) == 2 and type(rest[0]) is int and type(rest[1]) is str:
+            return handle(rest[0], rest[1][:200])
+    except (TypeError, ValueError, OverflowError) as error:
+        if isinstance(error, DecodeError):
+            raise
+        raise DecodeError(f"a value tagged {tag!r} is damaged: {error}") from None
+    raise DecodeError(f"a value tagged {tag[:10]!r} is not in the expected form")
+
+
+def _decode_array(dtype: Any, shape: Any, data: Any) -> Any:
+    import numpy as np
+
+    if dtype not in DTYPES or type(shape) is not list or type(data) is not str:
+        raise DecodeError("an array is not in the expected form")
+    if len(shape) > 32 or not all(type(n) is int and n >= 0 for n in shape):
+        raise DecodeError("an array's shape is not a list of sizes")
+    raw = base64.b64decode(data.encode("ascii"), validate=True)
+    kind = np.dtype(dtype)
+    count = 1
+    for n in shape:
+        count *= n
+    if count * kind.itemsize != len(raw):
+        raise DecodeError("an array's data does not fill its shape")
+    return np.frombuffer(raw, dtype=kind).astype(kind.newbyteorder("="), copy=True).reshape(shape)
+
+
+# ---------------------------------------------------------------------------------------------
+# The kernel's side.
+
+_KEPT: Dict[int, Any] = {}
+
+
+def _keep(value: Any) -> List[Any]:
+    number = len(_KEPT) + 1
+    _KEPT[number] = value
+    kind = type(value)
+    return ["h", number, f"{kind.__module__}.{kind.__qualname__}"]
+
+
+def _kept(number: int, name: str) -> Any:
+    if number not in _KEPT:
+        raise LookupError(f"no object number {number}")
+    return _KEPT[number]
+
+
+def _describe(error: BaseException) -> Dict[str, Any]:
+    import traceback
+
+    lines = traceback.format_exception(type(error), error, error.__traceback__)
+    # The first frame is this module's own call: the student's frames follow.
+    return {
+        "type": type(error).__name__,
+        "message": str(error)[:MAX_TEXT],
+        "traceback": [line[:MAX_TEXT] for line in lines[-30:]],
+    }
+
+
+def answer(text: str) -> str:
+    """Do the request ``text`` (JSON) in this kernel; the answer, as JSON text."""
+    try:
+        request = json.loads(text)
+        value = _do(request)
+        return json.dumps({"value": encode(value, _keep)})
+    except BaseException as error:  # the student's error is the answer
+        return json.dumps({"raised": _describe(error)})
+
+
+def _do(request: Dict[str, Any]) -> Any:  # noqa: PLR0911 - one branch per request
+    op = request["op"]
+    if op == "get":
+        from IPython import get_ipython
+
+        space = get_ipython().user_ns
+        if request["name"] not in space:
+            raise NameError(f"name {request['name']!r} is not defined")
+        return space[request["name"]]
+    target = _kept(request["target"], "")
+    if op == "call":
+        args = decode(request["args"], _kept)
+        kwargs = decode(request["kwargs"], _kept)
+        return target(*args, **kwargs)
+    if op == "attr":
+        return getattr(target, request["name"])
+    if op == "item":
+        return target[decode(request["key"], _kept)]
+    if op == "len":
+        return len(target)
+    if op == "bool":
+        return bool(target)
+    if op == "iter":
+        items = []
+        for item in target:
+            items.append(item)
+            if len(items) > MAX_ITEMS:
+                raise ValueError(f"more than {MAX_ITEMS} items")
+        return items
+    if op == "repr":
+        return repr(target)[:MAX_TEXT]
+    if op == "str":
+        return str(target)[:MAX_TEXT]
+    raise ValueError(f"unknown request {op!r}")
+
+
+# ---------------------------------------------------------------------------------------------
+# The grader's side.
+
+
+class StudentError(Exception):
+    """An error the student's code raised, of a kind Python does not define."""
+
+
+class CallsBroken(Exception):
+    """The kernel could not answer (it died, ran out of time, or answered nonsense)."""
+
+
+class Abandon(BaseException):
+    """The notebook's run is over (its time, or its sandbox, ended): the test stops at once."""
+
+
+#: Module prefixes whose classes a handle may claim to be an instance of (for ``isinstance``).
+_CLAIMABLE = ("matplotlib.", "numpy.", "duckielib.")
+
+
+class Remote:
+    """An object of the student's, in the kernel; everything asked of it is asked there."""
+
+    __slots__ = ("_number", "_kind", "_link")
+
+    def __init__(self, number: int, kind: str, link: Link) -> None:
+        object.__setattr__(self, "_number", number)
+        object.__setattr__(self, "_kind", kind)
+        object.__setattr__(self, "_link", link)
+
+    def _ask(self, op: str, **more: Any) -> Any:
+        return self._link.ask({"op": op, "target": self._number, **more})
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return self._ask("attr", name=name)
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        raise AttributeError("the grader does not change the student's objects")
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        """Call the student's object in the kernel with these (plain) arguments."""
+        return self._ask(
+            "call", args=self._link.encode(list(args)), kwargs=self._link.encode(dict(kwargs))
+        )
+
+    def __len__(self) -> int:
+        got = self._ask("len")
+        if type(got) is not int or got < 0:
+            raise TypeError(f"the length of a {self._kind} is not a number")
+        return got
+
+    def __bool__(self) -> bool:
+        got = self._ask("bool")
+        if type(got) is not bool:
+            raise TypeError(f"the truth of a {self._kind} is not a bool")
+        return got
+
+    def __iter__(self) -> Any:
+        got = self._ask("iter")
+        if type(got) is not list:
+            raise TypeError(f"a {self._kind} could not be iterated")
+        return iter(got)
+
+    def __getitem__(self, key: Any) -> Any:
+        return self._ask("item", key=self._link.encode(key))
+
+    def __repr__(self) -> str:
+        got = self._ask("repr")
+        return got[:MAX_TEXT] if type(got) is str else f"<{self._kind}>"
+
+    def __str__(self) -> str:
+        got = self._ask("str")
+        return got[:MAX_TEXT] if type(got) is str else f"<{self._kind}>"
+
+    def __eq__(self, other: Any) -> bool:
+        return self is other
+
+    def __ne__(self, other: Any) -> bool:
+        return self is not other
+
+    def __hash__(self) -> int:
+        return hash((self._number, id(self._link)))
+
+    @property  # type: ignore[misc]
+    def __class__(self) -> type:
+        claimed = _claimed_class(self._kind)
+        return claimed if claimed is not None else type(self)
+
+
+def _claimed_class(kind: str) -> Optional[type]:
+    """The library class named ``kind`` (``module.Name``), when it is one of a known library's."""
+    import importlib
+
+    if not kind.startswith(_CLAIMABLE):
+        return None
+    module, _, name = kind.rpartition(".")
+    try:
+        found = getattr(importlib.import_module(module), name)
+    except Exception:
+        return None
+    return found if isinstance(found, type) else None
+
+
+_REMOTE_CLASSES: Dict[str, type] = {}
+
+
+def _remote_class(kind: str) -> type:
+    """A subclass of :class:`Remote` named as the student's class, for messages."""
+    short = kind.rpartition(".")[2] or "object"
+    if not short.isidentifier():
+        short = "object"
+    if short not in _REMOTE_CLASSES:
+        _REMOTE_CLASSES[short] = type(short, (Remote,), {"__slots__": ()})
+    return _REMOTE_CLASSES[short]
+
+
+class Link:
+    """The grader's end of the calls: sends requests to the kernel, decodes the answers.
+
+    Args:
+        send: sends a request (a dict) and returns the kernel's answer text, or raises
+            :class:`CallsBroken`.
+        paths: ``{grader's folder: the same folder in the sandbox}``, for paths passed as
+            arguments.
+    """
+
+    def __init__(self, send: Callable[[Dict[str, Any]], str], paths: Dict[str, str]) -> None:
+        self.send = send
+        self.paths = paths
+        self.calls = 0
+
+    def encode(self, value: Any) -> Any:
+        """``value`` as data for the kernel (paths moved into the sandbox's view)."""
+
+        def refuse(item: Any) -> List[Any]:
+            if isinstance(item, Remote) and item._link is self:
+                return ["h", item._number, item._kind]
+            raise TypeError(f"the grader cannot pass a {type(item).__name__} to student code")
+
+        return encode(self._in_sandbox(value), refuse)
+
+    def _in_sandbox(self, value: Any) -> Any:
+        import os
+
+        if isinstance(value, os.PathLike):
+            value = os.fspath(value)
+        if isinstance(value, str):
+            for outside, inside in self.paths.items():
+                if value == outside or value.startswith(outside.rstrip("/") + "/"):
+                    _readable(outside, value)
+                    return inside + value[len(outside.rstrip("/")) :]
+            return value
+        if type(value) in (list, tuple):
+            return type(value)(self._in_sandbox(item) for item in value)
+        if type(value) is dict:
+            return {key: self._in_sandbox(item) for key, item in value.items()}
+        return value
+
+    def get(self, name: str) -> Any:
+        """The student's global ``name``, as a value or a :class:`Remote`."""
+        return self.ask({"op": "get", "name": name})
+
+    def ask(self, request: Dict[str, Any]) -> Any:
+        """Send ``request`` to the kernel; the value it answered, or the error it raised."""
+        self.calls += 1
+        text = self.send(request)
+        try:
+            reply = json.loads(text)
+        except (ValueError, RecursionError):
+            reply = None
+        if type(reply) is dict and len(reply) == 1 and "broken" in reply:
+            raise CallsBroken(str(reply["broken"])[:MAX_TEXT])
+        if type(reply) is dict and len(reply) == 1 and "raised" in reply:
+            raise _student_error(reply["raised"])
+        if type(reply) is not dict or len(reply) != 1 or "value" not in reply:
+            raise CallsBroken("the kernel answered with something the grader cannot read")
+        try:
+            return decode(reply["value"], self._handle)
+        except (DecodeError, RecursionError) as error:
+            raise CallsBroken(f"the kernel's answer could not be read ({error})") from None
+
+    def _handle(self, number: int, kind: str) -> Remote:
+        return _remote_class(kind)(number, kind, self)
+
+
+def _readable(root: str, path: str) -> None:
+    """Let the sandbox's user read ``path`` and the folders from ``root`` down to it."""
+    from pathlib import Path
+
+    here = Path(path)
+    chain = [here, *here.parents]
+    for item in chain:
+        if not str(item).startswith(root.rstrip("/")) or not item.exists():
+            continue
+        if item.is_symlink():
+            continue
+        item.chmod(0o755 if item.is_dir() else 0o644)
+        if item.is_dir() and item == here:
+            for inner in item.rglob("*"):
+                if not inner.is_symlink():
+                    inner.chmod(0o755 if inner.is_dir() else 0o644)
+
+
+#: The errors a student's code may raise that a test can expect (``except ValueError``).
+_KNOWN_ERRORS = {
+    name: value
+    for name, value in vars(builtins).items()
+    if isinstance(value, type) and issubclass(value, Exception)
+}
+
+
+class RaisedInKernel(Exception):
+    """Carries the student's traceback lines with the error raised in the grader."""
+
+
+def _student_error(raised: Any) -> BaseException:
+    if type(raised) is not dict:
+        return CallsBroken("the kernel's error could not be read")
+    name = str(raised.get("type", "Exception"))[:100]
+    message = str(raised.get("message", ""))[:MAX_TEXT]
+    lines = raised.get("traceback", [])
+    lines = [str(line)[:MAX_TEXT] for line in lines[:30]] if type(lines) is list else []
+    kind = _KNOWN_ERRORS.get(name)
+    if kind is None:
+        error: BaseException = StudentError(f"{name}: {message}" if message else name)
+    else:
+        try:
+            error = kind(message)
+        except Exception:
+            error = StudentError(f"{name}: {message}")
+    error.__cause__ = RaisedInKernel("".join(lines))
+    return error
+
+
+def _defined_names(source: str) -> List[str]:
+    import symtable
+
+    try:
+        table = symtable.symtable(source, "<test>", "exec")
+    except SyntaxError:
+        return []
+    return [s.get_name() for s in table.get_symbols() if s.is_assigned() or s.is_imported()]
+
+
+def free_names(source: str) -> List[str]:
+    """The names ``source`` reads but neither defines nor finds among Python's builtins."""
+    import symtable
+
+    table = symtable.symtable(source, "<test>", "exec")
+    defined = {s.get_name() for s in table.get_symbols() if s.is_assigned() or s.is_imported()}
+    found: List[str] = []
+
+    def walk(scope: Any) -> None:
+        for symbol in scope.get_symbols():
+            name = symbol.get_name()
+            module_level = scope.get_type() == "module"
+            if (symbol.is_global() or (module_level and symbol.is_referenced())) and (
+                name not in defined and not hasattr(builtins, name) and name not in found
+            ):
+                found.append(name)
+        for child in scope.get_children():
+            walk(child)
+
+    walk(table)
+    return found
+
+
+def prelude(cells: List[Any]) -> Dict[str, Any]:
+    """The grader's namespace for a notebook's tests: the imports of its instructor's cells.
+
+    Only ``import`` statements of the cells that are neither answers nor tests are run, here in
+    the grader (a name an import cannot give here is asked of the kernel instead).
+    """
+    import ast
+    import contextlib
+    import io
+    import warnings
+
+    space: Dict[str, Any] = {"__name__": "__grader_tests__"}
+    for cell in cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if cell.get("cell_type") != "code" or meta.get("grade") or meta.get("solution"):
+            continue
+        lines = str(cell.get("source", "")).splitlines()
+        text = "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in lines)
+        try:
+            tree = ast.parse(text)
+        except SyntaxError:
+            continue
+        for node in tree.body:
+            if isinstance(node, (ast.Import, ast.ImportFrom)) and not getattr(node, "level", 0):
+                code = compile(ast.Module(body=[node], type_ignores=[]), "<imports>", "exec")
+                with contextlib.suppress(Exception), warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    with contextlib.redirect_stdout(io.StringIO()):
+                        exec(code, space)
+    return space
+
+
+def run_test(source: str, grade_id: str, space: Dict[str, Any], link: Link) -> List[Dict[str, Any]]:
+    """Run one test cell here, the student's names asked of the kernel; the cell's outputs.
+
+    Args:
+        source: the test's code (hidden tests included).
+        grade_id: the test's name, in its tracebacks.
+        space: the notebook's namespace for its tests (:func:`prelude`); what the test defines
+            at its top level stays there for the next tests, as in a kernel.
+        link: the way to the kernel.
+
+    Returns:
+        The cell's outputs as notebook data: what the test printed and, if it failed, an error
+        whose traceback holds only the error's line (never the test's code) and, for an error
+        the student's code raised, the student's own traceback.
+    """
+    import contextlib
+    import io
+
+    outputs: List[Dict[str, Any]] = []
+    printed = io.StringIO()
+    cell = dict(space)
+    try:
+        names = [name for name in free_names(source) if name not in space]
+        for name in names:
+            # Without it, the test raises NameError where it uses the name, as in a kernel.
+            with contextlib.suppress(NameError):
+                cell[name] = link.get(name)
+        code = compile(source, f"<{grade_id}>", "exec")
+        with contextlib.redirect_stdout(printed):
+            exec(code, cell)
+        error = None
+    except BaseException as raised:  # the test's verdict
+        if isinstance(raised, (Abandon, KeyboardInterrupt)) and not isinstance(
+            raised.__cause__, RaisedInKernel
+        ):
+            raise
+        error = raised
+    finally:
+        for name in _defined_names(source):
+            if name in cell and not isinstance(cell[name], Remote):
+                space[name] = cell[name]
+    if printed.getvalue():
+        outputs.append({"output_type": "stream", "name": "stdout", "text": printed.getvalue()})
+    if error is not None:
+        outputs.append(_error_output(error))
+    return outputs
+
+
+def _error_output(error: BaseException) -> Dict[str, Any]:
+    if isinstance(error, CallsBroken):
+        name, value = "CellTimeoutError" if "time" in str(error) else "KernelError", str(error)
+    else:
+        name, value = type(error).__name__, str(error)
+        if isinstance(error, StudentError):
+            name, _, value = value.partition(": ")
+    line = f"{name}: {value}" if value else name
+    lines = []
+    if isinstance(error.__cause__, RaisedInKernel):
+        lines = [
+            line
+            for line in str(error.__cause__).splitlines()
+            if KERNEL_MODULE not in line and line.strip() != "Traceback (most recent call last):"
+        ]
+        lines = ["Traceback of your code (most recent call last):", *lines[:-1]] if lines else []
+    return {"output_type": "error", "ename": name, "evalue": value, "traceback": [*lines, line]}

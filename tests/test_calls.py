@@ -1,0 +1,183 @@
+"""The calls between the grader's tests and the student's kernel: plain data only, read strictly.
+
+The kernel's side is driven here through the same ``answer`` function the sandbox calls in a
+kernel, with the "kernel" a namespace of this process: what crosses is the JSON text alone.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from autograder import calls
+from autograder.calls import CallsBroken, Link, Remote, decode, encode, run_test
+
+
+class FakeKernel:
+    """The kernel's side of the calls, with ``names`` as the student's globals."""
+
+    def __init__(self, names):
+        self.names = names
+        self.requests = []
+
+    def send(self, request):
+        self.requests.append(request)
+        if request["op"] == "get":
+            if request["name"] not in self.names:
+                return json.dumps(
+                    {"raised": {"type": "NameError", "message": "no", "traceback": []}}
+                )
+            value = self.names[request["name"]]
+            return json.dumps({"value": encode(value, calls._keep)})
+        return calls.answer(json.dumps(request))
+
+
+def _link(names):
+    kernel = FakeKernel(names)
+    return Link(kernel.send, {}), kernel
+
+
+def test_plain_values_cross_as_themselves():
+    values = [
+        None, True, 3, -(10**40), 2.5, math.inf, complex(1, -2), "θ", b"\x00\xff",
+        [1, (2.0, "x")], {"a": [1], 2: None}, {1, 2},
+    ]  # fmt: skip
+    for value in values:
+        assert decode(json.loads(json.dumps(encode(value, calls._keep))), None) == value
+    nan = decode(encode(math.nan, calls._keep), None)
+    assert math.isnan(nan)
+
+
+def test_arrays_come_back_as_plain_numpy_arrays_of_their_dtype():
+    class AlwaysEqual(np.ndarray):
+        __hash__ = None
+
+        def __eq__(self, other):
+            return np.ones(np.shape(self), dtype=bool)
+
+    sneaky = np.arange(6, dtype=np.float32).reshape(2, 3).view(AlwaysEqual)
+    got = decode(json.loads(json.dumps(encode(sneaky, calls._keep))), None)
+    assert type(got) is np.ndarray
+    assert (got.dtype, got.shape) == (np.float32, (2, 3))
+    assert not np.array_equal(got, np.zeros((2, 3)))
+    big_endian = np.array([1.5, -2.0], dtype=">f8")
+    assert decode(encode(big_endian, calls._keep), None).tolist() == [1.5, -2.0]
+    scalar = decode(encode(np.float64(0.25), calls._keep), None)
+    assert type(scalar) is np.float64
+    assert scalar == 0.25
+
+
+@pytest.mark.parametrize(
+    "data",
+    [
+        "not a list",
+        [],
+        ["i", "12x"],
+        ["i", "1" * 5000],
+        ["f", "1" * 100],
+        ["a", "<f8", [2], "AAAA"],  # 3 bytes for two doubles
+        ["a", "|O", [1], ""],  # objects are never data
+        ["d", [["s", "k"]]],
+        ["q", 1],
+        ["l", [["l", [["l", []]]]] * 2, "extra"],
+    ],
+)
+def test_anything_else_is_refused(data):
+    with pytest.raises(calls.DecodeError):
+        decode(data, lambda number, kind: None)
+
+
+def test_nesting_past_the_limit_is_refused():
+    data = ["n"]
+    for _ in range(calls.MAX_DEPTH + 5):
+        data = ["l", [data]]
+    with pytest.raises(calls.DecodeError, match="deeply"):
+        decode(data, None)
+
+
+def test_a_students_object_stays_in_the_kernel_and_never_claims_to_equal_anything():
+    class Liar:
+        __hash__ = None
+
+        def __eq__(self, other):
+            return True
+
+        def value(self):
+            return 7
+
+    link, kernel = _link({"make": Liar})
+    made = link.get("make")()
+    assert isinstance(made, Remote)
+    assert type(made).__name__ == "Liar"
+    assert made != 7
+    assert (made == 7) is False
+    assert made.value() == 7
+    # Nothing the grader compared with was sent to the kernel.
+    assert all("7" not in json.dumps(request.get("args", [])) for request in kernel.requests)
+
+
+def test_a_test_fails_on_a_wrong_answer_whatever_the_kernel_patched_there():
+    link, _ = _link({"double": lambda x: x + 1})
+    outputs = run_test(
+        "import math\nassert math.isclose(double(2), 4), 'double(2) should be 4'\n",
+        "test_double",
+        {},
+        link,
+    )
+    assert outputs[-1]["ename"] == "AssertionError"
+    assert outputs[-1]["traceback"] == ["AssertionError: double(2) should be 4"]
+
+
+def test_a_passing_test_prints_what_it_printed_and_nothing_else():
+    link, _ = _link({"double": lambda x: 2 * x})
+    outputs = run_test("print('checked', double(21))\n", "test_double", {}, link)
+    assert outputs == [{"output_type": "stream", "name": "stdout", "text": "checked 42\n"}]
+
+
+def test_the_students_error_is_raised_as_its_kind_with_the_students_traceback_only():
+    def refuse(wheel):
+        raise ValueError(f"no wheel {wheel!r}")
+
+    link, _ = _link({"refuse": refuse})
+    source = (
+        "try:\n    refuse('middle')\nexcept ValueError:\n    pass\n"
+        "else:\n    raise AssertionError('should raise')\n"
+        "### BEGIN HIDDEN TESTS\nrefuse('secret input 42')\n### END HIDDEN TESTS\n"
+    )
+    outputs = run_test(source, "test_refuse", {}, link)
+    error = outputs[-1]
+    assert (error["ename"], error["evalue"]) == ("ValueError", "no wheel 'secret input 42'")
+    text = "\n".join(error["traceback"])
+    assert "raise ValueError" in text  # the student's own line
+    assert "HIDDEN" not in text  # never the test's code
+    assert "refuse('secret" not in text
+
+
+def test_a_missing_function_is_a_name_error_and_a_kernel_that_answers_nonsense_fails_the_test():
+    link, _ = _link({})
+    outputs = run_test("wrap_angle(1.0)\n", "test_wrap", {}, link)
+    assert outputs[-1]["ename"] == "NameError"
+
+    forged = Link(lambda request: '{"value": ["h", "1", "x"], "extra": 1}', {})
+    outputs = run_test("assert f(1) == 2\n", "test_f", {}, forged)
+    assert outputs[-1]["ename"] == "KernelError"
+    with pytest.raises(CallsBroken):
+        Link(lambda request: "[1, 2", {}).get("f")
+
+
+def test_the_tests_imports_and_definitions_are_the_graders():
+    cells = [
+        {"cell_type": "code", "metadata": {}, "source": "%matplotlib inline\nimport math as m\n"},
+        {"cell_type": "code", "metadata": {"nbgrader": {"solution": True}}, "source": "import os"},
+    ]
+    space = calls.prelude(cells)
+    assert space["m"] is math
+    assert "os" not in space
+    link, kernel = _link({"m": "the student's m"})
+    run_test("def helper():\n    return m.pi\n", "test_a", space, link)
+    outputs = run_test("assert helper() == m.pi\n", "test_b", space, link)
+    assert outputs == []
+    assert kernel.requests == []  # nothing was asked of the kernel
