@@ -700,10 +700,11 @@ class _Forks:
 def _kernel_env(env: Mapping[str, str]) -> Dict[str, str]:
     """The environment variables that matter to the zygote's imports, from a kernel's.
 
-    ``JPY_PARENT_PID`` names the kernel's parent, set for each kernel; an unset
+    ``JPY_PARENT_PID`` names the kernel's parent, set for each kernel, and ``IPYTHONDIR`` its
+    IPython folder, new for each notebook (read when the kernel starts, not at import); an unset
     ``MPLBACKEND`` is the inline backend ipykernel sets.
     """
-    kept = {key: value for key, value in env.items() if key != "JPY_PARENT_PID"}
+    kept = {key: value for key, value in env.items() if key not in ("JPY_PARENT_PID", "IPYTHONDIR")}
     if not kept.get("MPLBACKEND"):
         kept["MPLBACKEND"] = _INLINE_BACKEND
     return kept
@@ -1061,19 +1062,48 @@ def _processes(keep: Sequence[int]) -> Iterator[Tuple[int, Path]]:
             yield int(entry.name), entry
 
 
-def _kill_strays(keep: Sequence[int]) -> None:
+def _kill_strays(keep: Sequence[int]) -> int:
     """Kill every process of this user left in the sandbox but ``keep`` (between notebooks).
 
     A notebook may start processes that outlive its kernel (``subprocess.Popen`` of a
     server); the next notebook starts among none of them, as in a sandbox of its own.
+
+    Returns:
+        How many were killed (processes that had already ended are not counted).
     """
-    me = os.getuid()
+    me = str(os.getuid())
+    killed = 0
     for pid, entry in _processes(keep):
         try:
-            if entry.stat().st_uid == me:
+            # /proc/PID/status, not the folder's owner: the folder of a process that is not
+            # dumpable (as the kernels here, see _not_dumpable) belongs to root.
+            fields = dict(
+                line.split(":", 1)
+                for line in (entry / "status").read_text().splitlines()
+                if ":" in line
+            )
+            if fields.get("Uid", "").split()[:1] == [me] and not fields.get(
+                "State", ""
+            ).strip().startswith(("Z", "X")):
                 os.kill(pid, signal.SIGKILL)
+                killed += 1
         except OSError:
             continue
+    return killed
+
+
+def _not_dumpable() -> None:
+    """Keep this process's memory and files out of the kernels' reach (Linux).
+
+    The kernels run as the same user. A process that is not dumpable cannot be traced, and
+    its ``/proc/PID/mem`` and ``/proc/PID/fd`` cannot be opened, by a process of that user
+    without privileges, so a kernel can neither read this script's memory nor write on its
+    answer pipe. The zygote and the kernels forked from it inherit the setting.
+    """
+    import ctypes
+
+    with contextlib.suppress(Exception):
+        ctypes.CDLL(None, use_errno=True).prctl(4, 0, 0, 0, 0)  # PR_SET_DUMPABLE, 0
 
 
 def serve(cell_seconds: int, sandboxed: bool) -> None:
@@ -1088,7 +1118,11 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
         sandboxed: whether this runs in a sandbox of its own (its own user and process
             namespace): only then are processes a notebook left behind killed before the next.
     """
+    _not_dumpable()
     zygote = _start()
+    import shutil
+    import tempfile
+
     import nbformat
 
     given, answer = _private_streams()
@@ -1104,7 +1138,21 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
                 continue
             notebook = nbformat.reads(message["notebook"], as_version=4)
             folder = str(Path(message["folder"]).absolute())
-            _execute(notebook, folder, cell_seconds, zygote, sandboxed, channel)
+            # A new IPython folder for each notebook's kernel: nothing a notebook writes there
+            # (a startup file, a configuration) reaches the next one.
+            ipython = tempfile.mkdtemp(prefix="ipython-")
+            os.environ["IPYTHONDIR"] = ipython
+            try:
+                _execute(notebook, folder, cell_seconds, zygote, sandboxed, channel)
+            finally:
+                shutil.rmtree(ipython, ignore_errors=True)
+            if sandboxed:
+                left = _kill_strays(keep)
+                if left:
+                    notebook.metadata[METADATA_KEY]["problems"].append(
+                        f"the notebook left {left} process{'es' if left > 1 else ''} running "
+                        "after its last cell; the grader stopped them"
+                    )
             reply = {"notebook": nbformat.writes(notebook)}
         except Exception as error:  # the grader reports it for this notebook
             reply = {"problem": f"could not be run: {type(error).__name__}: {error}"}

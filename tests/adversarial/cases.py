@@ -47,6 +47,7 @@ class Case:
         empty: the student's folder is empty.
         link: a symbolic link of that name is put in the folder, pointing at the gradebook.
         files: other files put next to the notebook, ``name -> text``.
+        blank: the released notebook, every answer left unwritten, instead of the reference.
     """
 
     cell: Optional[str] = None
@@ -56,6 +57,7 @@ class Case:
     empty: bool = False
     link: Optional[str] = None
     files: Dict[str, str] = field(default_factory=dict)
+    blank: bool = False
 
 
 _TRY_READ = """\
@@ -105,6 +107,90 @@ np = _Anything()
 get_ipython().set_custom_exc((Exception,), lambda *args, **kwargs: None)
 """
 
+# Each of these attacks gave marks for blank answers when the tests ran in the student's kernel.
+_TURN_THE_TESTS_OFF = """\
+import ast
+import os
+
+ip = get_ipython()
+
+
+class _Swallow(ast.NodeTransformer):
+    # Every later cell is wrapped in try/except BaseException: pass.
+    def visit_Module(self, node):
+        handler = ast.ExceptHandler(type=ast.Name("BaseException", ast.Load()), name=None,
+                                    body=[ast.Pass()])
+        body = [ast.Try(body=node.body or [ast.Pass()], handlers=[handler], orelse=[],
+                        finalbody=[])]
+        return ast.fix_missing_locations(ast.Module(body=body, type_ignores=[]))
+
+
+ip.ast_transformers.append(_Swallow())
+ip.input_transformers_post.append(
+    lambda lines: [line.replace("assert ", "pass  # ") for line in lines]
+)
+# A startup file for the kernels of the notebooks after this one.
+startup = os.path.join(ip.profile_dir.location, "startup")
+os.makedirs(startup, exist_ok=True)
+with open(os.path.join(startup, "00-pass.py"), "w") as handle:
+    handle.write("import math\\nmath.isclose = lambda *a, **k: True\\n")
+# The grader's answer pipe, if it can be reached: write a forged reply on it.
+opened = []
+for pid in [p for p in os.listdir("/proc") if p.isdigit() and int(p) != os.getpid()]:
+    for fd in range(3, 12):
+        try:
+            with open(f"/proc/{pid}/fd/{fd}", "wb", buffering=0) as pipe:
+                pipe.write(b"\\x00" * 8)
+            opened.append(f"{pid}/{fd}")
+        except OSError:
+            pass
+try:
+    with open(f"/proc/{os.getppid()}/mem", "rb") as memory:
+        memory.read(1)
+    opened.append("mem")
+except OSError:
+    pass
+print("opened:", opened)
+"""
+
+# Answers that look for the expected value in the test's frames, or return an array that
+# compares equal to anything.
+_PEEKING_ANSWERS = {
+    "wrap_angle": """\
+import sys
+
+
+def wrap_angle(theta):
+    frame = sys._getframe(1)
+    while frame is not None:
+        for name in ("expected", "want", "wanted"):
+            if name in frame.f_locals:
+                return frame.f_locals[name]
+        frame = frame.f_back
+    return 0.0
+""",
+    "rotation_matrix": """\
+import numpy as np
+
+
+class _Yes(np.ndarray):
+    __hash__ = None
+
+    def __eq__(self, other):
+        return np.ones(self.shape, dtype=bool)
+
+    def __array_function__(self, function, types, args, kwargs):
+        return True
+
+    def __array_ufunc__(self, ufunc, method, *inputs, **kwargs):
+        return np.ones(self.shape, dtype=bool)
+
+
+def rotation_matrix(theta):
+    return np.zeros((2, 2)).view(_Yes)
+""",
+}
+
 CASES: Dict[str, Case] = {
     "reference": Case(),
     "infinite_loop": Case(cell="while True:\n    pass\n"),
@@ -143,6 +229,11 @@ CASES: Dict[str, Case] = {
         cell="print(undefined_name)\n",
         answers={"wrap_angle": "def wrap_angle(theta):\n    return theta\n"},
     ),
+    "tests_turned_off": Case(cell=_TURN_THE_TESTS_OFF, blank=True),
+    "peeking": Case(answers=_PEEKING_ANSWERS),
+    "reads_history": Case(
+        cell="raise RuntimeError('|'.join(In) + repr(Out))\n", after="test_wrap_angle"
+    ),
     "malformed": Case(raw='{"cells": [ this is not a notebook'),
     "empty": Case(empty=True),
 }
@@ -156,6 +247,8 @@ def expected_loss(name: str) -> Tuple[str, ...]:
         "monkey_patch": ("test_wrap_angle", "test_rotation_matrix"),
         "shadow_numpy": ("test_rotation_matrix",),
         "raises_outside_tests": ("test_wrap_angle",),
+        "tests_turned_off": ("*",),
+        "peeking": ("test_wrap_angle", "test_rotation_matrix"),
         "malformed": ("*",),
         "empty": ("*",),
     }.get(name, ())

@@ -44,7 +44,10 @@ def build(folder, name, case, paths):
     if case.raw is not None:
         path.write_text(case.raw, encoding="utf-8")
         return
-    notebook = filled_notebook(ASSIGNMENT)
+    if case.blank:
+        notebook = nbformat.read(ROOT / "course" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
+    else:
+        notebook = filled_notebook(ASSIGNMENT)
     for cell in notebook.cells:
         if _grade_id(cell) in case.answers:
             cell.source = case.answers[_grade_id(cell)]
@@ -228,3 +231,37 @@ def test_a_fork_bomb_costs_only_its_own_cell(graded):
     alone = "03_frames: 1 cell outside the tests raised: cell 3 (import os): "
     assert problem.startswith(alone)
     assert problem[len(alone) :].startswith(("BlockingIOError: ", "CellTimeoutError: ")), problem
+
+
+def test_code_that_turns_the_tests_off_in_its_kernel_changes_nothing(graded):
+    # AST and input transformers, a startup file, a forged reply: the tests do not run in the
+    # kernel, and the server's pipes and memory are out of the kernel's reach.
+    results, out, _ = graded
+    assert results["tests_turned_off"].total == 0
+    printed = "".join(o.get("text", "") for o in _outputs(out, "tests_turned_off"))
+    assert "opened: []" in printed
+
+
+def test_no_hidden_test_reaches_the_student_or_the_problems(graded):
+    results, out, _ = graded
+    source = nbformat.read(ROOT / "solutions" / ASSIGNMENT / f"{ASSIGNMENT}.ipynb", 4)
+    hidden = [
+        line.strip()
+        for cell in source.cells
+        if _grade_id(cell).startswith("test_") and "### BEGIN HIDDEN TESTS" in cell.source
+        for line in cell.source.split("### BEGIN HIDDEN TESTS")[1].splitlines()
+        if len(line.strip()) > 25
+    ]
+    assert len(hidden) > 20
+    said = [
+        " ".join(results[name].problems)
+        + " ".join(results[name].messages.values())
+        + (out / "feedback" / f"{name}.html").read_text()
+        for name in ("reads_history", "peeking", "tests_turned_off")
+    ]
+    said.append((out / "grades.csv").read_text())
+    leaked = [line for line in hidden for text in said if line in text or html.escape(line) in text]
+    assert not leaked
+    # The history the student's code could read held no test.
+    assert any("RuntimeError" in problem for problem in results["reads_history"].problems)
+    assert results["reads_history"].total == FULL_MARKS
