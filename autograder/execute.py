@@ -208,25 +208,31 @@ def _guarded_client_class():
                     _kill_kernel_copies(getattr(self.km.provisioner, "pid", None))
 
         async def _serve_test(self, cell, index, grade_id):
-            """A test the grader runs on its side: answer its calls until it says it is done.
+            """A test the grader runs on its side: relay its calls until it says it is done.
 
-            The cell's code never comes here (its source is empty); each call is run in the
-            kernel by the calls module (``autograder/calls.py``), and its answer, a text, goes
-            back to the grader as it is.
+            The cell's code never comes here (its source is empty). While the test runs, the
+            kernel serves the calls (``serve`` of ``autograder/calls.py``, one hidden
+            execution for the whole test, with the cell's time limit) over a socket of its
+            own; :class:`_Relay` passes each call from the grader to it and each answer, a
+            text, back.
             """
+            import asyncio
+
             if not getattr(self, "calls_ready", False):
                 self.calls_ready = True
                 await self._run_hidden(_calls_setup(), index, text=True)
-            self.channel.say({"test": grade_id})
-            while True:
-                message = self.channel.hear()
-                if message is None or "end" in message:
-                    break
-                code = f"__import__('sys').modules[{KERNEL_MODULE!r}].answer({message['call']!r})"
-                answer = await self._run_hidden(code, index, text=True)
-                if answer is None:
-                    answer = json.dumps({"broken": _no_answer(self.last_probe)})
-                self.channel.say({"answer": answer})
+            relay = _Relay(self.channel, self.timeout or 60)
+            try:
+                self.channel.say({"test": grade_id})
+                talk = asyncio.ensure_future(asyncio.to_thread(relay.run))
+                try:
+                    code = f"__import__('sys').modules[{KERNEL_MODULE!r}].serve({relay.path!r})"
+                    await self._run_hidden(code, index, text=True)
+                finally:
+                    relay.kernel_done(_no_answer(self.last_probe))
+                    await talk
+            finally:
+                relay.close()
             cell.outputs = []
             self.code_cells_executed += 1
             cell.execution_count = self.code_cells_executed
@@ -281,6 +287,82 @@ def _no_answer(cell: Any) -> str:
                 return "the student's code ran out of time"
             return f"the kernel gave no answer ({output.get('ename')})"
     return "the kernel gave no answer"
+
+
+class _Relay:
+    """Passes one test's calls from the grader to the kernel's socket, and the answers back.
+
+    Runs in a thread while the kernel serves the test (see ``_serve_test``). The kernel
+    connects to a Unix socket in a new folder of the sandbox's ``/tmp``; each call and answer
+    is one frame (:func:`frame`). When the kernel stops serving (the test's end, its time
+    limit, a crash), every call still to come is answered ``{"broken": why}``.
+    """
+
+    def __init__(self, channel: Channel, seconds: float) -> None:
+        import socket
+        import tempfile
+
+        self.channel = channel
+        self.seconds = seconds
+        self.folder = tempfile.mkdtemp(prefix="calls-")
+        self.path = str(Path(self.folder) / "socket")
+        self.listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.listener.bind(self.path)
+        self.listener.listen(1)
+        self.connection: Any = None
+        self.dead: Optional[str] = None
+
+    def kernel_done(self, why: str) -> None:
+        """The kernel serves no more (said from the event loop's thread)."""
+        self.dead = why or "the kernel stopped answering"
+
+    def _accept(self) -> Any:
+        deadline = time.monotonic() + self.seconds
+        while self.connection is None and self.dead is None and time.monotonic() < deadline:
+            if select.select([self.listener], [], [], 0.05)[0]:
+                self.connection, _ = self.listener.accept()
+        return self.connection
+
+    def _ask(self, call: str) -> Optional[str]:
+        connection = self._accept()
+        if connection is None:
+            return None
+        try:
+            connection.sendall(frame(call.encode("utf-8")))
+            with connection.makefile("rb") as stream:
+                data = read_frame(stream)
+        except OSError:
+            data = None
+        if data is None:
+            self.connection = None
+            connection.close()
+            return None
+        return data.decode("utf-8", errors="replace")
+
+    def run(self) -> None:
+        """Relay calls until the grader says the test is over (or closes its pipe)."""
+        while True:
+            message = self.channel.hear()
+            if message is None or "end" in message:
+                connection = self._accept() if self.dead is None else self.connection
+                if connection is not None:
+                    with contextlib.suppress(OSError):
+                        connection.sendall(frame(b"end"))
+                return
+            answer = self._ask(str(message.get("call", "")))
+            if answer is None:
+                answer = json.dumps({"broken": self.dead or "the kernel did not answer"})
+            self.channel.say({"answer": answer})
+
+    def close(self) -> None:
+        """Close the sockets and remove their folder."""
+        import shutil
+
+        for end in (self.connection, self.listener):
+            if end is not None:
+                with contextlib.suppress(OSError):
+                    end.close()
+        shutil.rmtree(self.folder, ignore_errors=True)
 
 
 class Channel:
