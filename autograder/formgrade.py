@@ -72,6 +72,8 @@ def command(work: Path, extra: Sequence[str] = ()) -> List[str]:
         "lab",
         f"--ServerApp.root_dir={work}",
         "--LabApp.default_url=/formgrader",
+        # A strict Content-Security-Policy on Formgrader's pages (see autograder/formgrade_csp).
+        "--ServerApp.jpserver_extensions=autograder.formgrade_csp=True",
     ]
     if os.getuid() == 0:
         argv.append("--allow-root")
@@ -108,15 +110,82 @@ def rubrics(source: Path, names: Iterable[str]) -> Dict[Tuple[str, str], str]:
     return found
 
 
+#: What an output may show in Formgrader (pictures as data; no SVG, no script, no widget).
+_SHOWN = ("text/plain", "text/html", "text/markdown", "text/latex", "image/png", "image/jpeg",
+          "image/gif")  # fmt: skip
+#: The kinds of link a student's answer or output may hold.
+SAFE_SCHEMES = frozenset({"http", "https", "mailto"})
+_INLINE_LINK = re.compile(r"(\]\(\s*)([^)\s]*)")
+_REFERENCE = re.compile(r"^(\s{0,3}\[[^\]]*\]:\s*)(\S+)", re.M)
+
+
+def _safe_url(url: str) -> bool:
+    """Whether ``url`` (as a student wrote it) leads only to a web or mail address, or nowhere."""
+    import html
+
+    plain = re.sub(r"[\x00-\x20\\<>]", "", html.unescape(html.unescape(url))).lower()
+    scheme = re.match(r"([a-z][a-z0-9+.-]*):", plain)
+    return scheme is None or scheme.group(1) in SAFE_SCHEMES
+
+
+def safe_markdown(text: str) -> str:
+    """A student's markdown as Formgrader may show it: HTML as text, no link to a script."""
+
+    def link(found: re.Match) -> str:
+        return found.group(1) + (found.group(2) if _safe_url(found.group(2)) else "#")
+
+    text = text.replace("<", "&lt;")
+    return _REFERENCE.sub(link, _INLINE_LINK.sub(link, text))
+
+
+def _safe_output(output: Dict) -> Dict:
+    """A cell's output with only what :data:`_SHOWN` allows, its HTML cleaned by nh3."""
+    import nh3
+
+    kind = output.get("output_type")
+    if kind not in ("display_data", "execute_result"):
+        return {key: value for key, value in output.items() if key != "metadata"}
+    data = {}
+    for mime, value in (output.get("data") or {}).items():
+        if mime not in _SHOWN:
+            continue
+        text = "".join(value) if isinstance(value, list) else str(value)
+        if mime == "text/html":
+            text = nh3.clean(text, url_schemes=set(SAFE_SCHEMES))
+        elif mime == "text/markdown":
+            text = safe_markdown(text)
+        data[mime] = text
+    metadata = {}
+    for mime, value in (output.get("metadata") or {}).items():
+        if mime.startswith("image/") and isinstance(value, dict):
+            size = {
+                key: int(number)
+                for key, number in value.items()
+                if key in ("width", "height")
+                and isinstance(number, (int, float))
+                and not isinstance(number, bool)
+                and 0 < number < 100_000
+            }
+            if size:
+                metadata[mime] = size
+    safe = {"output_type": kind, "data": data, "metadata": metadata}
+    if kind == "execute_result":
+        safe["execution_count"] = output.get("execution_count")
+    return safe
+
+
 def for_formgrader(text: str, name: str, known: Mapping[Tuple[str, str], str]) -> str:
     """The autograded notebook ``text`` (JSON) of assignment ``name``, as Formgrader shows it.
 
-    Each answer in words gets its rubric in a cell right after it. Every markdown cell's HTML is
-    shown as text (``<`` written ``&lt;``): Formgrader renders markdown unsanitised in the
-    instructor's own JupyterLab, so a tag in a student's answer (``<img onerror=...>``) would
-    run there. Outputs are sanitised by Formgrader's exporter (``nbgrader_config.py`` of
-    :func:`prepare`). Cells already tagged :data:`RUBRIC_TAG` are dropped first, so the result
-    is the same however often this runs. Text that is not a notebook is returned as it is.
+    Each answer in words gets its rubric in a cell right after it. What the student wrote is made
+    safe to show in the instructor's JupyterLab, where a script would act with the instructor's
+    rights: every markdown cell's HTML is shown as text (:func:`safe_markdown`, which also
+    turns links to anything but web and mail addresses into ``#``), and every output keeps only
+    text, HTML cleaned by nh3, and PNG, JPEG and GIF pictures whose size, if any, is a number
+    (:func:`_safe_output`). Formgrader's own exporter sanitises again (``nbgrader_config.py`` of
+    :func:`prepare`), and its pages run under a strict policy (:mod:`autograder.formgrade_csp`).
+    Cells already tagged :data:`RUBRIC_TAG` are dropped first, so the result is the same
+    however often this runs. Text that is not a notebook is returned as it is.
     """
     try:
         notebook = json.loads(text)
@@ -130,9 +199,16 @@ def for_formgrader(text: str, name: str, known: Mapping[Tuple[str, str], str]) -
         if RUBRIC_TAG in cell.get("metadata", {}).get("tags", []):
             continue
         kept.append(cell)
+        if cell.get("cell_type") == "code":
+            cell["outputs"] = [
+                _safe_output(output)
+                for output in cell.get("outputs", [])
+                if isinstance(output, dict)
+            ]
         if cell.get("cell_type") != "markdown":
             continue
-        cell["source"] = _source_text(cell).replace("<", "&lt;")
+        cell.pop("attachments", None)
+        cell["source"] = safe_markdown(_source_text(cell))
         grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id")
         rubric = known.get((name, str(grade_id)))
         if rubric is not None:

@@ -11,8 +11,18 @@ from __future__ import annotations
 
 import time
 
+import nbformat
 import pytest
-from formgrading import ANSWER, ASSIGNMENT, RUBRIC, WRITTEN, check_folded, formgrader, small_class
+from formgrading import (
+    ANSWER,
+    ASSIGNMENT,
+    RUBRIC,
+    WRITTEN,
+    answer_cell,
+    check_folded,
+    formgrader,
+    small_class,
+)
 from playwright.sync_api import expect
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook]
@@ -82,3 +92,88 @@ def test_an_instructor_grades_an_answer_in_formgrader_and_feedback_shows_it(
         page.close()
 
     check_folded(out, POINTS, COMMENT)
+
+
+#: A PNG of one pixel.
+_PIXEL = (
+    "iVBORw0KGgoAAAANSUhEUgAAAAEAAAABCAYAAAAfFcSJAAAADUlEQVR42mP8z8BQDwAEhQ"
+    "GAhKmMIQAAAABJRU5ErkJggg=="
+)
+#: What each attack does if it runs: a flag on the window and a file written through the
+#: Jupyter server's contents API, with the instructor's rights.
+_RUN = "window.{flag}=1;fetch('/api/contents/{flag}.txt',{{method:'PUT'}})"
+
+
+def _hostile(course):
+    """ada's notebook with a script in every place a student controls that Formgrader shows."""
+    answer = (
+        f'See <img src=x onerror="{_RUN.format(flag="ANSWER_RAN")}"> and '
+        f"[a link](javascript:{_RUN.format(flag='LINK_RAN')}) and [another][1]\n\n"
+        f"[1]: jav&#x61;script:{_RUN.format(flag='REFERENCE_RAN')}\n"
+    )
+    course.student.cells[-1] = answer_cell(answer)
+    shown = f"""\
+from IPython.display import HTML, Javascript, display, publish_display_data
+
+publish_display_data(
+    data={{"image/png": "{_PIXEL}", "text/plain": "a picture"}},
+    metadata={{
+        "image/png": {{"width": "1 onerror={_RUN.format(flag="WIDTH_RAN")}", "height": 1}},
+        "filenames": {{"image/png": "http://outside.invalid/picture.png"}},
+    }},
+)
+display(HTML('<script>{_RUN.format(flag="OUTPUT_RAN")}</script>'
+             '<img src="http://outside.invalid/html.png"><b>bold</b>'))
+display(Javascript("{_RUN.format(flag="SCRIPT_RAN")}"))
+svg = '<svg xmlns="http://www.w3.org/2000/svg" onload="{_RUN.format(flag="SVG_RAN")}"/>'
+display({{"image/svg+xml": svg}}, raw=True)
+"""
+    course.student.cells.insert(-1, nbformat.v4.new_code_cell(shown))
+    nbformat.write(course.student, course.handed_in)
+
+
+def test_opening_a_hostile_submission_in_formgrader_runs_no_script_and_loads_nothing_else(
+    sandbox, browser, tmp_path
+):
+    course = small_class(tmp_path)
+    _hostile(course)
+    out = tmp_path / "out"
+    course.grade(out)
+    flags = ["ANSWER_RAN", "LINK_RAN", "REFERENCE_RAN", "WIDTH_RAN", "OUTPUT_RAN", "SCRIPT_RAN",
+             "SVG_RAN"]  # fmt: skip
+    with formgrader(out) as server:
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.set_default_timeout(30_000)
+        requests, blocked = [], []
+        page.on("request", lambda request: requests.append(request.url))
+        page.on(
+            "console",
+            lambda message: (
+                blocked.append(message.text) if "Content Security Policy" in message.text else None
+            ),
+        )
+        page.goto(server.url())
+        page.get_by_role("link", name="Manual Grading").click()
+        page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()
+        page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()
+        page.get_by_role("link", name="Submission #1").wait_for()
+        page.get_by_text("Show All Names").click()  # Formgrader's own handler still works
+        page.get_by_role("link", name="ada", exact=True).click()
+        page.wait_for_url("**/formgrader/submissions/**")
+        page.locator(f"input#{ANSWER}.score").wait_for()
+        frame = page.main_frame
+        # The student's links, clicked as an instructor might.
+        for name in ("a link", "another"):
+            links = page.get_by_role("link", name=name, exact=True)
+            if links.count():
+                links.first.click()
+        page.wait_for_timeout(500)
+        ran = {flag: frame.evaluate(f"window.{flag} === 1") for flag in flags}
+        assert not any(ran.values()), ran
+        local = f"http://127.0.0.1:{server.port}/"
+        assert [url for url in requests if not url.startswith((local, "data:"))] == []
+        page.close()
+    written = [flag for flag in flags if (out / "work" / f"{flag}.txt").exists()]
+    assert written == []
+    # Formgrader's own scripts ran: the page showed the score box and the student's name.
+    assert blocked, "the page's policy was not in force (nothing was blocked)"
