@@ -433,7 +433,7 @@ def limit_outputs(notebook: object, limit: int = OUTPUT_LIMIT) -> List[str]:
             f"[The grader kept {_megabytes(limit)} of this cell's {_megabytes(total)} of output; "
             "the rest was left out.]\n"
         )
-        kept.append(nbformat.v4.new_output("stream", name="stderr", text=note))
+        kept.append(nbformat.v4.new_output("stream", name="stdout", text=note))
         cell.outputs = kept
         said.append(
             f"cell {number} showed {_megabytes(total)} of output; the stored notebook keeps "

@@ -233,7 +233,7 @@ def write_feedback(
         answers: the answers in words, graded by a person: ``(assignment, grade_id)``. Their
             points and the person's comment are shown, never their rubric.
     """
-    heading = f"Feedback for {result.student}"
+    heading = f"Feedback for {result.shown}"
     parts = [
         "<!DOCTYPE html>",
         '<html lang="en"><head><meta charset="utf-8">',

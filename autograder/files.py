@@ -38,6 +38,13 @@ __all__ = [
 FILE_LIMIT = 50 * 1024**2
 #: The most read from one student's folder, all files together, in bytes.
 FOLDER_LIMIT = 200 * 1024**2
+#: The most files read from one student's folder (the course's folders hold a few each).
+COUNT_LIMIT = 2000
+#: The longest path read, in bytes, and the longest name of one file or folder in it.
+PATH_LIMIT = 1024
+NAME_LIMIT = 255
+#: How many files left out are said one by one; the others are counted in one sentence.
+SAID_LIMIT = 50
 
 _FLAGS = os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | getattr(os, "O_CLOEXEC", 0)
 _KINDS = (
@@ -121,11 +128,45 @@ class Collected:
 
     files: Dict[str, bytes] = field(default_factory=dict)
     left_out: List[str] = field(default_factory=list)
+    #: The bytes taken so far, kept as files are added (:meth:`add`), so that reading a folder
+    #: of many files takes time in proportion to them.
+    taken: int = 0
+    unsaid: int = 0
 
     @property
     def size(self) -> int:
         """The bytes taken, all files together."""
-        return sum(len(data) for data in self.files.values())
+        return self.taken
+
+    def add(self, name: str, data: bytes) -> None:
+        """Take file ``name``."""
+        self.taken += len(data) - len(self.files.get(name, b""))
+        self.files[name] = data
+
+    def leave_out(self, sentence: str) -> None:
+        """Say that something was left out (the first :data:`SAID_LIMIT` one by one)."""
+        if len(self.left_out) < SAID_LIMIT:
+            self.left_out.append(sentence)
+        else:
+            self.unsaid += 1
+
+    def close(self) -> Collected:
+        """Say how many more were left out than were said; return this."""
+        if self.unsaid:
+            self.left_out.append(f"{self.unsaid} more files were left out (not listed one by one).")
+            self.unsaid = 0
+        return self
+
+
+def _too_long(name: str) -> str:
+    """Why the path ``name`` is not read, or "" if it may be."""
+    raw = name.encode("utf-8", "surrogateescape")
+    if len(raw) > PATH_LIMIT or any(
+        len(part.encode("utf-8", "surrogateescape")) > NAME_LIMIT
+        for part in PurePosixPath(name).parts
+    ):
+        return f"{name[:60]}... has a name longer than a file system takes; it was left out."
+    return ""
 
 
 def collect_folder(
@@ -133,6 +174,7 @@ def collect_folder(
     skip: Iterable[str] = (),
     file_limit: int = FILE_LIMIT,
     folder_limit: int = FOLDER_LIMIT,
+    count_limit: int = COUNT_LIMIT,
 ) -> Collected:
     """Every regular file below ``folder``, read safely (see the module's description).
 
@@ -145,6 +187,8 @@ def collect_folder(
         skip: glob patterns of names (not paths) to leave out silently.
         file_limit: the largest file taken, in bytes.
         folder_limit: the most taken in all, in bytes.
+        count_limit: the most files taken; names that are too long for a file system are left
+            out too. Past :data:`SAID_LIMIT` sentences, the files left out are counted.
     """
     skip = tuple(skip)
     collected = Collected()
@@ -166,36 +210,48 @@ def collect_folder(
                 pending.append((Path(entry.path), f"{name}/"))
                 continue
             if not stat.S_ISREG(info.st_mode):
-                collected.left_out.append(f"{name} is {_kind(info.st_mode)}; it was left out.")
+                collected.leave_out(f"{name} is {_kind(info.st_mode)}; it was left out.")
                 continue
             room = folder_limit - collected.size
+            if _too_long(name):
+                collected.leave_out(_too_long(name))
+                continue
+            if len(collected.files) >= count_limit:
+                collected.leave_out(
+                    f"{name} was left out: at most {count_limit} files are read from a folder."
+                )
+                continue
             if info.st_size > file_limit:
-                collected.left_out.append(
+                collected.leave_out(
                     f"{name} is {_size(info.st_size)}; at most {_size(file_limit)} is read. "
                     "It was left out."
                 )
                 continue
             if info.st_size > room:
-                collected.left_out.append(
+                collected.leave_out(
                     f"{name} was left out: the folder's files passed {_size(folder_limit)}."
                 )
                 continue
             try:  # read as it is now, which may not be what it was a moment ago
                 data = read_regular(root, name, min(file_limit, room))
             except UnsafeFile as error:
-                collected.left_out.append(f"{error} It was left out.")
+                collected.leave_out(f"{error} It was left out.")
                 continue
-            collected.files[name] = data
-    return collected
+            collected.add(name, data)
+    return collected.close()
 
 
 def unpack_zip(
-    archive: Union[str, Path], skip: Iterable[str] = (), folder_limit: int = FOLDER_LIMIT
+    archive: Union[str, Path],
+    skip: Iterable[str] = (),
+    folder_limit: int = FOLDER_LIMIT,
+    count_limit: int = COUNT_LIMIT,
 ) -> Collected:
     """The files of a ``.zip`` as :func:`collect_folder` gives a folder's, never written to disk.
 
     Members with absolute paths or ``..`` make the whole archive refused; links (zip can hold
-    them as Unix modes) are left out; so is everything once ``folder_limit`` bytes are taken.
+    them as Unix modes) are left out; so is everything once ``folder_limit`` bytes or
+    ``count_limit`` files are taken, and every member whose name is too long for a file system.
     A member with a part of its path matching a pattern of ``skip`` is left out silently.
 
     Raises:
@@ -212,15 +268,23 @@ def unpack_zip(
                     raise UnsafeFile(f"it holds the unsafe path {member.filename!r}")
             for member in members:
                 mode = member.external_attr >> 16
+                name = PurePosixPath(member.filename).as_posix()
                 if member.is_dir() or _skipped(PurePosixPath(member.filename).parts, skip):
                     continue
                 if stat.S_IFMT(mode) not in (0, stat.S_IFREG):  # a link, a FIFO...
-                    collected.left_out.append(
-                        f"{member.filename} is {_kind(mode)}; it was left out."
+                    collected.leave_out(f"{member.filename} is {_kind(mode)}; it was left out.")
+                    continue
+                if _too_long(name):
+                    collected.leave_out(_too_long(name))
+                    continue
+                if len(collected.files) >= count_limit:
+                    collected.leave_out(
+                        f"{name} was left out: at most {count_limit} files are read from an "
+                        "archive."
                     )
                     continue
                 if collected.size + member.file_size > folder_limit:
-                    collected.left_out.append(
+                    collected.leave_out(
                         f"{member.filename} was left out: the archive's files passed "
                         f"{_size(folder_limit)}."
                     )
@@ -228,17 +292,17 @@ def unpack_zip(
                 with opened.open(member) as handle:
                     data = handle.read(folder_limit - collected.size + 1)
                 if collected.size + len(data) > folder_limit:
-                    collected.left_out.append(
+                    collected.leave_out(
                         f"{member.filename} was left out: the archive's files passed "
                         f"{_size(folder_limit)}."
                     )
                     continue
-                collected.files[PurePosixPath(member.filename).as_posix()] = data
+                collected.add(name, data)
     except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError, ValueError) as error:
         raise UnsafeFile(f"it is not a readable zip ({error})") from None
     except UnsafeFile:
         raise
-    return collected
+    return collected.close()
 
 
 def _skipped(parts: Iterable[str], skip: Iterable[str]) -> bool:

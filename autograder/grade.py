@@ -30,6 +30,8 @@ import io
 import json
 import logging
 import os
+import re
+import shutil
 import signal
 import socket
 import stat
@@ -153,15 +155,45 @@ def read_submission(path: Path, course: List[str]) -> Collected:
 
 
 def _left_out(lines: List[str], names: List[str]) -> List[str]:
-    """What was left out of the graded assignments' folders, as ``NAME: sentence``."""
+    """What was left out, as ``NAME: sentence`` for a graded assignment's folder.
+
+    What was left out of an assignment that is not graded is not said; a sentence about the
+    whole submission (a refused zip, whose path may hold a ``/``) is said as it is.
+    """
     said = []
     for line in lines:
         name, _, rest = line.partition("/")
         if name in names and rest:
             said.append(f"{name}: {rest}")
-        elif not rest:
+        elif not (rest and _ASSIGNMENT.match(name)):
             said.append(line[:1].upper() + line[1:])
     return said
+
+
+#: An assignment's folder name (``05_odometry``).
+_ASSIGNMENT = re.compile(r"[0-9]{2}_[A-Za-z0-9_]+\Z")
+#: A student's folder name nbgrader and every file system take as it is.
+_PLAIN_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}\Z")
+
+
+def student_id(name: str) -> str:
+    """The id a student is graded under: their folder's name, or a plain form of it and a hash.
+
+    nbgrader cannot grade a student whose id has spaces at its ends, brackets or a new line,
+    and a file system refuses a file name of more than 255 bytes; such a name becomes its
+    letters, digits, ``_`` and ``-`` (at most 40) and 8 digits of its SHA-256 (``alice `` ->
+    ``alice-3f6c...``). The name as written stays in ``grades.csv`` and the feedback page.
+    """
+    if _PLAIN_ID.match(name) and not name.endswith("."):
+        return name
+    raw = name.encode("utf-8", "surrogateescape")
+    stem = re.sub(r"[^A-Za-z0-9_-]+", "-", name).strip("-")[:40] or "student"
+    return f"{stem}-{hashlib.sha256(raw).hexdigest()[:8]}"
+
+
+def _as_written(name: str) -> str:
+    """A folder's name as text (bytes that are not UTF-8 shown as the replacement character)."""
+    return name.encode("utf-8", "surrogateescape").decode("utf-8", "replace")
 
 
 def _fingerprint(*parts: Any) -> str:
@@ -242,11 +274,15 @@ def _grade_on_worker(
     """The Dask task: one student's unit, on whichever worker runs it."""
     course = _UNPACKED.get(key)
     if course is None or not course.is_dir():
+        # A worker that outlives a class run (a cluster's) keeps only the latest course.
+        for old in [old for old in _UNPACKED if old != key]:
+            shutil.rmtree(_UNPACKED.pop(old), ignore_errors=True)
         course = Path(tempfile.mkdtemp(prefix="duckie-course-", dir=_scratch()))
         with tarfile.open(fileobj=io.BytesIO(blob), mode="r:gz") as archive:
             archive.extractall(course, filter="data")
         _UNPACKED[key] = course
-    return run_unit(task, files, course)
+    # In the worker's own folder: Dask removes it with the worker, even one that was killed.
+    return run_unit(task, files, course, scratch=_scratch())
 
 
 @contextmanager
@@ -281,6 +317,8 @@ class _Writer:
     results: Dict[str, StudentResult] = dataclasses.field(default_factory=dict)
     #: The rubric of each answer in words, shown under it in the notebooks Formgrader shows.
     rubrics: Dict[Tuple[str, str], str] = dataclasses.field(default_factory=dict)
+    #: The folder's name as written, by student id, where the two differ (:func:`student_id`).
+    shown: Dict[str, str] = dataclasses.field(default_factory=dict)
 
     def record(self, result: StudentResult, autograded: Dict[str, str], key: str) -> None:
         """Keep one student's result: gradebook, notebooks, feedback, JSON, the class's CSV.
@@ -291,6 +329,7 @@ class _Writer:
             self._record(result, autograded, key)
 
     def _record(self, result: StudentResult, autograded: Dict[str, str], key: str) -> None:
+        result.name = self.shown.get(result.student, result.name)
         for cell, most in self.cells.items():
             result.cells.setdefault(cell, (0.0, most))
         result.cells = {cell: result.cells[cell] for cell in sorted(result.cells)}
@@ -408,7 +447,7 @@ class _Writer:
             score = result.driving_score
             writer.writerow(
                 [
-                    _text_cell(result.student),
+                    _text_cell(result.shown),
                     f"{result.total:g}",
                     f"{result.max_total:g}",
                     str(len(result.to_grade)),
@@ -638,9 +677,12 @@ def grade_class(
     }
     started = time.monotonic()
     pending: List[Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]] = []
-    for student in sorted(students):
+    for folder_name in sorted(students):
+        student = student_id(folder_name)
+        if student != folder_name:
+            writer.shown[student] = _as_written(folder_name)
         try:
-            collected = read_submission(students[student], course)
+            collected = read_submission(students[folder_name], course)
         except UnsafeFile as error:
             collected, refused = Collected(), f"the submission was not graded: {error}"
             collected.left_out.append(refused)
@@ -648,6 +690,7 @@ def grade_class(
         key = _fingerprint(setup.key, options, files, collected.left_out)
         kept = _kept(out, student, key)
         if kept is not None:
+            kept.name = writer.shown.get(student, kept.name)
             writer.results[student] = kept
             continue
         said = _left_out(collected.left_out, names)

@@ -27,7 +27,9 @@ class StudentResult:
     """What grading one student gave.
 
     Attributes:
-        student: the student's id (their folder's name).
+        student: the student's id: their folder's name, or for a name nbgrader or a file system
+            cannot take (spaces at its ends, brackets, a new line, 250 characters), a plain
+            form of it with a hash (:func:`autograder.grade.student_id`).
         cells: ``(assignment, grade_id) -> (score, max_score)``.
         problems: one sentence each: what went wrong while grading (not failed tests).
         messages: ``(assignment, grade_id) -> message`` of each failed test.
@@ -41,6 +43,7 @@ class StudentResult:
         comments: ``(assignment, cell) -> text``: what a person wrote in nbgrader's
             Formgrader about a cell (an answer in words, or the code of a graded cell), read
             from the gradebook at every run.
+        name: the folder's name as written, when the id differs from it (:attr:`shown`).
         timings: where the unit's time went, in seconds: ``notebooks`` (the sandboxed runs,
             kernels' starts included), ``cells`` (the cells themselves), ``nbgrader`` (its
             converters and gradebook), ``driving`` (export and mission), ``unit`` (all);
@@ -57,6 +60,12 @@ class StudentResult:
     to_grade: List[Tuple[str, str]] = field(default_factory=list)
     comments: Dict[Tuple[str, str], str] = field(default_factory=dict)
     timings: Dict[str, float] = field(default_factory=dict)
+    name: str = ""
+
+    @property
+    def shown(self) -> str:
+        """The student as the instructor named them: the folder's name as written."""
+        return self.name or self.student
 
     @property
     def total(self) -> float:
@@ -107,6 +116,7 @@ def to_data(result: StudentResult) -> Dict[str, Any]:
         "to_grade": [_key(cell) for cell in result.to_grade],
         "comments": {_key(key): value for key, value in result.comments.items()},
         "timings": dict(result.timings),
+        "name": result.name,
     }
 
 
@@ -131,6 +141,7 @@ def from_data(data: Dict[str, Any]) -> StudentResult:
         to_grade=[_pair(str(key)) for key in data.get("to_grade", [])],
         comments={_pair(key): str(value) for key, value in data.get("comments", {}).items()},
         timings={str(key): float(value) for key, value in data.get("timings", {}).items()},
+        name=str(data.get("name", "")),
     )
 
 

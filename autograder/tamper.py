@@ -26,6 +26,11 @@ _VALID_ID = re.compile(r"^[a-zA-Z0-9-_]{1,64}$")
 _ROLES = ("grade", "solution", "locked", "task")
 
 
+#: The most cells a handed-in notebook may have (the course's have about 80 each): a notebook
+#: of 100,000 cells would hold its grading for minutes before any cell ran.
+CELL_LIMIT = 2000
+
+
 def repair(submitted: Path, release: Path) -> Tuple[NotebookNode, List[str]]:
     """A notebook nbgrader can grade fairly, built from ``submitted`` and the release's cells.
 
@@ -56,6 +61,11 @@ def repair(submitted: Path, release: Path) -> Tuple[NotebookNode, List[str]]:
         version = notebook.get("nbformat")
         if version not in (3, 4):
             raise ValueError("it is JSON but not a notebook of nbformat 3 or 4")
+        cells = notebook.get("cells", notebook.get("worksheets", [{}])[0].get("cells", []))
+        if len(cells) > CELL_LIMIT:
+            raise ValueError(
+                f"it has {len(cells)} cells, more than the {CELL_LIMIT} the grader takes"
+            )
         notebook = nbformat.convert(notebook, 4)
         repaired, problems = _Repair(name, original).run(notebook)
         nbformat.validate(repaired)

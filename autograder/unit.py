@@ -64,13 +64,16 @@ def _pdeathsig() -> None:  # pragma: no cover - runs in the child before exec
     libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
 
 
-def run_unit(task: Dict[str, Any], files: Dict[str, bytes], course: Path) -> Dict[str, Any]:
+def run_unit(
+    task: Dict[str, Any], files: Dict[str, bytes], course: Path, scratch: Optional[str] = None
+) -> Dict[str, Any]:
     """Grade one student in a process of its own; what it found, as plain data.
 
     Args:
         task: the student, the assignments, the limits (see :mod:`autograder.grade`).
         files: the student's files, ``"NAME/relative/path" -> bytes``, already read safely.
         course: a folder with the class's ``source/``, ``release/`` and ``gradebook.db``.
+        scratch: the folder the unit's own temporary folder goes in (the system's by default).
 
     Returns:
         ``{"result": ..., "autograded": {NAME: notebook text}}``, the result as
@@ -80,7 +83,7 @@ def run_unit(task: Dict[str, Any], files: Dict[str, bytes], course: Path) -> Dic
     from autograder.files import write_files
 
     seconds = unit_seconds(task)
-    with tempfile.TemporaryDirectory(prefix="duckie-unit-") as folder:
+    with tempfile.TemporaryDirectory(prefix="duckie-unit-", dir=scratch) as folder:
         base = Path(folder)
         write_files(base / "submission", files)
         (base / "task.json").write_text(
@@ -154,6 +157,7 @@ def _sandboxed_execute_class(unit: _Unit):
                     executed = None
                     problem = "answered with something that is not the notebook sent"
             if executed is not None:
+                _stderr_is_no_failure(executed, nb)
                 for index, grade_id in tests.items():
                     cell = executed.cells[index]
                     cell.source = nb.cells[index].source
@@ -187,6 +191,21 @@ def _sandboxed_execute_class(unit: _Unit):
 
 
 _NOT_RUN_TEST = "This test did not run: the notebook's kernel stopped before it."
+
+
+def _stderr_is_no_failure(executed: Any, sent: Any) -> None:
+    """Show what a test run in the kernel wrote on stderr as ordinary output.
+
+    nbgrader scores a test cell with any stderr output zero: a warning or a log line of the
+    student's correct code would cost the test. Which cells are tests comes from ``sent``.
+    """
+    for index, cell in enumerate(sent.cells):
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if cell.cell_type != "code" or not meta.get("grade") or meta.get("solution"):
+            continue
+        for output in executed.cells[index].get("outputs", []):
+            if output.get("output_type") == "stream" and output.get("name") == "stderr":
+                output["name"] = "stdout"
 
 
 def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:

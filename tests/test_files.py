@@ -118,3 +118,58 @@ def test_grades_csv_keeps_a_name_a_spreadsheet_would_take_for_a_formula_as_text(
         ("ada", "'-x"),
         ("o'neil", ""),
     ]
+
+
+def test_a_folder_of_many_files_is_read_up_to_the_limit_and_said_in_one_sentence(tmp_path):
+    folder = tmp_path / "many"
+    folder.mkdir()
+    for number in range(60):
+        (folder / f"f{number:03d}.txt").write_bytes(b"x")
+    collected = collect_folder(folder, count_limit=5)
+    assert sorted(collected.files) == [f"f{number:03d}.txt" for number in range(5)]
+    assert collected.size == 5
+    # 55 left out: 50 said one by one (the limit of sentences), then one sentence for the rest.
+    assert len(collected.left_out) == 51
+    assert collected.left_out[0] == "f005.txt was left out: at most 5 files are read from a folder."
+    assert collected.left_out[-1] == "5 more files were left out (not listed one by one)."
+
+
+def test_names_too_long_for_a_file_system_are_left_out_of_a_zip_and_the_rest_is_read(tmp_path):
+    archive = tmp_path / "long.zip"
+    long = "a" * 300 + ".txt"
+    with zipfile.ZipFile(archive, "w") as zipped:
+        zipped.writestr(f"03_frames/{long}", b"x")
+        zipped.writestr("03_frames/03_frames.ipynb", b"{}")
+    collected = unpack_zip(archive)
+    assert sorted(collected.files) == ["03_frames/03_frames.ipynb"]
+    (said,) = collected.left_out
+    assert said.startswith("03_frames/aaaa")
+    assert said.endswith("has a name longer than a file system takes; it was left out.")
+
+
+def test_a_refused_zip_says_why_and_names_no_notebook_it_never_opened(tmp_path):
+    from autograder.grade import _left_out
+
+    refused = "the submission was not graded: it holds the unsafe path '../../etc/passwd'"
+    said = _left_out([refused, "03_frames/x.bin is a FIFO; it was left out.",
+                      "05_odometry/y is a FIFO; it was left out."], ["03_frames"])  # fmt: skip
+    assert said == [
+        refused[:1].upper() + refused[1:],
+        "03_frames: x.bin is a FIFO; it was left out.",
+    ]
+
+
+@pytest.mark.parametrize(
+    "name", ["alice ", "new\nline", "st[1]", "l" * 250, " lead", "dots.", "=HYPERLINK(1)"]
+)
+def test_any_folder_name_gets_an_id_nbgrader_and_file_systems_take(name):
+    import re
+
+    from autograder.grade import student_id
+
+    made = student_id(name)
+    assert re.fullmatch(r"[A-Za-z0-9][A-Za-z0-9_-]{0,40}-[0-9a-f]{8}", made), made
+    assert student_id(name) == made  # the same at every run
+    assert student_id(name + "x") != made
+    assert student_id("ada") == "ada"
+    assert student_id("ada.lovelace_2") == "ada.lovelace_2"

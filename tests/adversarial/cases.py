@@ -230,10 +230,21 @@ CASES: Dict[str, Case] = {
         answers={"wrap_angle": "def wrap_angle(theta):\n    return theta\n"},
     ),
     "tests_turned_off": Case(cell=_TURN_THE_TESTS_OFF, blank=True),
+    # Correct answers that warn and log on stderr while the tests call them.
+    "warns": Case(
+        answers={
+            "wrap_angle": "import logging\nimport math\nimport warnings\n\n\n"
+            "def wrap_angle(theta):\n    warnings.warn('wrapping')\n"
+            "    logging.warning('wrapping %s', theta)\n    return theta % (2 * math.pi)\n"
+        }
+    ),
     "peeking": Case(answers=_PEEKING_ANSWERS),
     "reads_history": Case(
         cell="raise RuntimeError('|'.join(In) + repr(Out))\n", after="test_wrap_angle"
     ),
+    # Folder names nbgrader or a file system would not take as an id, with correct work.
+    "st[1] with\na new line ": Case(),
+    "l" * 250: Case(),
     "malformed": Case(raw='{"cells": [ this is not a notebook'),
     "empty": Case(empty=True),
 }

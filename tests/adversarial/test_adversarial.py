@@ -88,7 +88,8 @@ def graded(sandbox, tmp_path_factory):
         names=[ASSIGNMENT],
         driving=False,
     )
-    return {result.student: result for result in results}, out, paths
+    # By folder name as written (a folder nbgrader cannot take as an id is graded under another).
+    return {result.shown: result for result in results}, out, paths
 
 
 def _scores(result):
@@ -123,6 +124,19 @@ def test_a_well_behaved_student_in_the_same_class_gets_full_marks(graded):
     results, _, _ = graded
     assert results["reference"].total == FULL_MARKS
     assert results["reference"].problems == []
+
+
+def test_a_folder_name_nbgrader_cannot_take_is_graded_under_an_id_and_shown_as_written(graded):
+    results, out, _ = graded
+    with (out / "grades.csv").open(newline="") as handle:
+        rows = {row["student"]: row for row in csv.DictReader(handle)}
+    for name in ("st[1] with\na new line ", "l" * 250):
+        result = results[name]
+        assert (result.total, result.problems) == (FULL_MARKS, [])
+        assert result.student != name
+        assert rows[name]["total"] == f"{FULL_MARKS:g}"
+        page = (out / "feedback" / f"{result.student}.html").read_text()
+        assert f"Feedback for {html.escape(name)}" in page
 
 
 @pytest.mark.parametrize(
@@ -211,10 +225,11 @@ def test_the_gradebook_is_intact_and_holds_every_grade(graded):
         graded_students = {
             submission.student.id for submission in gradebook.assignment_submissions(ASSIGNMENT)
         }
+        by_id = {result.student: result for result in results.values()}
         for name in graded_students:
             submission = gradebook.find_submission(ASSIGNMENT, name)
-            assert submission.score == results[name].total, name
-    assert graded_students >= set(CASES) - {"empty"}
+            assert submission.score == by_id[name].total, name
+    assert graded_students >= {results[name].student for name in CASES if name != "empty"}
     # A problem may span lines (a quoted field): count the CSV's records, not its lines.
     with (out / "grades.csv").open(newline="") as handle:
         students = [row["student"] for row in csv.DictReader(handle)]
