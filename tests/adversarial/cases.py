@@ -235,7 +235,9 @@ CASES: Dict[str, Case] = {
         answers={
             "wrap_angle": "import logging\nimport math\nimport warnings\n\n\n"
             "def wrap_angle(theta):\n    warnings.warn('wrapping')\n"
-            "    logging.warning('wrapping %s', theta)\n    return theta % (2 * math.pi)\n"
+            "    logging.warning('wrapping %s', theta)\n"
+            "    wrapped = float(theta) % (2 * math.pi)\n"
+            "    return 0.0 if wrapped >= 2 * math.pi else wrapped\n"
         }
     ),
     "peeking": Case(answers=_PEEKING_ANSWERS),
