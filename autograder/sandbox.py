@@ -31,6 +31,8 @@ from duckielib.errors import DuckielibError
 
 __all__ = [
     "Limits",
+    "cpu_share",
+    "end_cpu_share",
     "SandboxError",
     "SandboxUnavailable",
     "check_sandbox",
@@ -74,6 +76,9 @@ class Limits:
         uid: the unprivileged user (and group) the code runs as. The process limit counts
             every process of that user, so each student's grading uses a user of its own
             (:func:`unit_user`): a fork bomb cannot starve another student's sandbox.
+        cpus: how many CPUs all of one student's sandboxed processes may use together, where
+            the machine lets the grader make control groups (:func:`cpu_share`): busy loops
+            a student leaves running slow only that student's grading.
     """
 
     cell_seconds: int = 60
@@ -86,6 +91,80 @@ class Limits:
     file_bytes: int = 1024**3
     output_bytes: int = 256 * 1024**2
     uid: int = NOBODY
+    cpus: float = 1.0
+
+
+#: Where control groups of CPU time are made: cgroup v1's ``cpu`` controller, or cgroup v2.
+CGROUP_ROOTS = (Path("/sys/fs/cgroup/cpu"), Path("/sys/fs/cgroup"))
+
+
+def cpu_share(uid: int, cpus: float) -> Optional[Path]:
+    """The control group of user ``uid``'s sandboxes: at most ``cpus`` CPUs for all of them.
+
+    Made on first use (the same group for every sandbox of one student's grading). Returns
+    None where the machine lets the grader make none (no cgroup controller for CPU, or no
+    right to write it): the per-process CPU time limit then still holds.
+    """
+    period = 100_000
+    quota = max(1000, int(cpus * period))
+    for root in CGROUP_ROOTS:
+        version_1 = (root / "cpu.cfs_quota_us").is_file()
+        version_2 = (root / "cgroup.subtree_control").is_file() and "cpu" in _text(
+            root / "cgroup.subtree_control"
+        ).split()
+        if not (version_1 or version_2):
+            continue
+        group = root / f"duckie-{uid}"
+        try:
+            group.mkdir(exist_ok=True)
+            if version_1:
+                (group / "cpu.cfs_period_us").write_text(str(period))
+                (group / "cpu.cfs_quota_us").write_text(str(quota))
+            else:
+                (group / "cpu.max").write_text(f"{quota} {period}")
+        except OSError:
+            with contextlib.suppress(OSError):
+                group.rmdir()
+            continue
+        return group
+    return None
+
+
+def _text(path: Path) -> str:
+    try:
+        return path.read_text()
+    except OSError:
+        return ""
+
+
+def joined(group: Optional[Path], command: Sequence[str]) -> List[str]:
+    """``command``, started from within ``group`` (so are all the processes it starts)."""
+    if group is None:
+        return list(command)
+    # The shell moves itself into the group, then becomes the command.
+    script = 'echo $$ > "$0" && exec "$@"'
+    return ["/bin/sh", "-c", script, str(group / "cgroup.procs"), *command]
+
+
+def end_cpu_share(uid: int) -> None:
+    """Kill what is left in user ``uid``'s control group, and remove the group."""
+    import signal
+    import time
+
+    for root in CGROUP_ROOTS:
+        group = root / f"duckie-{uid}"
+        if not group.is_dir():
+            continue
+        for _ in range(50):
+            pids = [int(line) for line in _text(group / "cgroup.procs").split() if line.isdigit()]
+            for pid in pids:
+                with contextlib.suppress(OSError):
+                    os.kill(pid, signal.SIGKILL)
+            try:
+                group.rmdir()
+                break
+            except OSError:
+                time.sleep(0.02)
 
 
 def unit_user() -> int:
@@ -294,6 +373,8 @@ def run(
     ) as err:
         given.write((stdin or "").encode("utf-8"))
         given.seek(0)
+        if use_sandbox:
+            command = joined(cpu_share(limits.uid, limits.cpus), command)
         process = subprocess.Popen(
             list(command),
             stdin=given,

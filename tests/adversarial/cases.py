@@ -230,6 +230,12 @@ CASES: Dict[str, Case] = {
         answers={"wrap_angle": "def wrap_angle(theta):\n    return theta\n"},
     ),
     "tests_turned_off": Case(cell=_TURN_THE_TESTS_OFF, blank=True),
+    # Busy loops left running in the background, in sessions of their own.
+    "busy_loops": Case(
+        cell="import subprocess\nimport sys\n\nfor _ in range(8):\n"
+        "    subprocess.Popen([sys.executable, '-c', 'while True: pass'], "
+        "start_new_session=True)\n"
+    ),
     # Correct answers that warn and log on stderr while the tests call them.
     "warns": Case(
         answers={

@@ -280,3 +280,13 @@ def test_no_hidden_test_reaches_the_student_or_the_problems(graded):
     # The history the student's code could read held no test.
     assert any("RuntimeError" in problem for problem in results["reads_history"].problems)
     assert results["reads_history"].total == FULL_MARKS
+
+
+def test_busy_loops_left_running_are_stopped_and_said(graded):
+    results, _, _ = graded
+    result = results["busy_loops"]
+    assert result.total == FULL_MARKS
+    assert result.problems == [
+        "03_frames: the notebook left 8 processes running after its last cell; the grader "
+        "stopped them"
+    ]
