@@ -398,12 +398,13 @@ class _Server:
             self.process = self._start()
         request = frame(json.dumps({"folder": name, "notebook": text}).encode("utf-8"))
         final: List[Dict[str, Any]] = []
+        process = self.process
 
         def ask(call: str, until: float, cell_seconds: int) -> str:
             if final:
                 raise CallsBroken("the notebook's kernel had stopped")
             try:
-                _write_all(self.process.stdin, frame(json.dumps({"call": call}).encode()), deadline)
+                _write_all(process.stdin, frame(json.dumps({"call": call}).encode()), deadline)
                 while True:
                     got = self._reply(min(until, deadline))
                     if "answer" in got:

@@ -181,3 +181,25 @@ def test_the_tests_imports_and_definitions_are_the_graders():
     outputs = run_test("assert helper() == m.pi\n", "test_b", space, link)
     assert outputs == []
     assert kernel.requests == []  # nothing was asked of the kernel
+
+
+def test_the_robots_name_a_test_sets_is_the_one_the_students_code_reads(monkeypatch):
+    import os
+
+    link, kernel = _link({"robot_topic": lambda name: f"/{os.environ['VEHICLE_NAME']}/{name}"})
+    monkeypatch.setenv("VEHICLE_NAME", "outside")
+    source = (
+        "import os\n"
+        "os.environ['VEHICLE_NAME'] = 'autobot07'\n"
+        "assert robot_topic('chatter') == '/autobot07/chatter'\n"
+        "del os.environ['VEHICLE_NAME']\n"
+        "try:\n    robot_topic('chatter')\nexcept KeyError:\n    pass\n"
+        "else:\n    raise AssertionError('should raise KeyError')\n"
+        "os.environ['VEHICLE_NAME'] = 'outside'\n"
+    )
+    assert run_test(source, "test_robot_topic", {}, link) == []
+    calls = [request for request in kernel.requests if request["op"] == "call"]
+    assert [request["environment"] for request in calls] == [
+        {"VEHICLE_NAME": "autobot07"},
+        {"VEHICLE_NAME": None},
+    ]

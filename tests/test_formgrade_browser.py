@@ -4,7 +4,10 @@ The class of :mod:`formgrading` is graded; ``duckie formgrade`` opens nbgrader's
 and the test clicks its way to ada's submission: Manual Grading, the assignment, the notebook,
 Show All Names, ada. There it reads the answer and its rubric, types the points and a comment
 into the page's own inputs and leaves each with Tab, which is when Formgrader saves. Then
-``duckie feedback`` folds them into ``grades.csv`` and ada's feedback page.
+``duckie feedback`` folds them into ``grades.csv`` and ada's feedback page. ada's notebook also
+holds a script in every other place a student controls that Formgrader shows (a markdown cell,
+outputs, their metadata): opening her submission runs none of them and loads nothing from
+elsewhere.
 """
 
 from __future__ import annotations
@@ -18,7 +21,6 @@ from formgrading import (
     ASSIGNMENT,
     RUBRIC,
     WRITTEN,
-    answer_cell,
     check_folded,
     formgrader,
     small_class,
@@ -46,51 +48,60 @@ def _given(server, submission_id):
     return grade["manual_score"], comment["manual_comment"]
 
 
-def test_an_instructor_grades_an_answer_in_formgrader_and_feedback_shows_it(
-    sandbox, browser, tmp_path
-):
-    out = tmp_path / "out"
-    (graded,) = small_class(tmp_path).grade(out)
-    assert graded.to_grade == [(ASSIGNMENT, ANSWER)]
-
+@pytest.fixture(scope="module")
+def opened(sandbox, tmp_path_factory):
+    """ada's class graded, with a script in every place a student controls besides the answer
+    (:func:`_hostile`), and Formgrader opened on it: ``(ada's result, out, server)``."""
+    root = tmp_path_factory.mktemp("formgrade")
+    course = small_class(root)
+    _hostile(course)
+    out = root / "out"
+    (graded,) = course.grade(out)
     with formgrader(out) as server:
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.set_default_timeout(30_000)
-        page.goto(server.url())  # Formgrader's start page: Manage Assignments
-        page.get_by_role("link", name="Manual Grading").click()
-        page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()  # assignment
-        page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()  # notebook
-        page.get_by_role("link", name="Submission #1").wait_for()  # the table is filled in
-        page.get_by_text("Show All Names").click()
-        page.get_by_role("link", name="ada", exact=True).click()
-        page.wait_for_url("**/formgrader/submissions/**")
-        submission_id = page.url.rstrip("/").rsplit("/", 1)[-1]
+        yield graded, out, server
 
-        # The student's answer, and right after it the rubric, for the grader's eyes only.
-        answer = page.locator(f".cell:has(input#{ANSWER})")
-        expect(answer.locator(".panel-body")).to_have_text(WRITTEN)
-        rubric = page.locator(f".cell:has(input#{ANSWER}) + .cell")
-        expect(rubric).to_contain_text("For the grader, not in the student's notebook")
-        expect(rubric).to_contain_text(RUBRIC.replace("**", ""))
-        assert _given(server, submission_id) == (None, None)
 
-        page.locator(f"input#{ANSWER}.score").fill(POINTS)
-        page.keyboard.press("Tab")
-        page.locator(f"textarea#{ANSWER}-comment").fill(COMMENT)
-        page.keyboard.press("Tab")
-        deadline = time.monotonic() + 30
-        while _given(server, submission_id) != (float(POINTS), COMMENT):
-            assert time.monotonic() < deadline, "Formgrader did not save within 30 s"
-            time.sleep(0.2)
-        answer.scroll_into_view_if_needed()
-        page.screenshot(path=tmp_path / "formgrader.png")
+def test_an_instructor_grades_an_answer_in_formgrader_and_feedback_shows_it(
+    opened, browser, tmp_path
+):
+    graded, out, server = opened
+    assert graded.to_grade == [(ASSIGNMENT, ANSWER)]
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.set_default_timeout(30_000)
+    page.goto(server.url())  # Formgrader's start page: Manage Assignments
+    page.get_by_role("link", name="Manual Grading").click()
+    page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()  # assignment
+    page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()  # notebook
+    page.get_by_role("link", name="Submission #1").wait_for()  # the table is filled in
+    page.get_by_text("Show All Names").click()
+    page.get_by_role("link", name="ada", exact=True).click()
+    page.wait_for_url("**/formgrader/submissions/**")
+    submission_id = page.url.rstrip("/").rsplit("/", 1)[-1]
 
-        # What a person sees when they come back: the page holds what they gave.
-        page.reload()
-        expect(page.locator(f"input#{ANSWER}.score")).to_have_value(POINTS)
-        expect(page.locator(f"textarea#{ANSWER}-comment")).to_have_value(COMMENT)
-        page.close()
+    # The student's answer, and right after it the rubric, for the grader's eyes only.
+    answer = page.locator(f".cell:has(input#{ANSWER})")
+    expect(answer.locator(".panel-body")).to_have_text(WRITTEN)
+    rubric = page.locator(f".cell:has(input#{ANSWER}) + .cell")
+    expect(rubric).to_contain_text("For the grader, not in the student's notebook")
+    expect(rubric).to_contain_text(RUBRIC.replace("**", ""))
+    assert _given(server, submission_id) == (None, None)
 
+    page.locator(f"input#{ANSWER}.score").fill(POINTS)
+    page.keyboard.press("Tab")
+    page.locator(f"textarea#{ANSWER}-comment").fill(COMMENT)
+    page.keyboard.press("Tab")
+    deadline = time.monotonic() + 30
+    while _given(server, submission_id) != (float(POINTS), COMMENT):
+        assert time.monotonic() < deadline, "Formgrader did not save within 30 s"
+        time.sleep(0.2)
+    answer.scroll_into_view_if_needed()
+    page.screenshot(path=tmp_path / "formgrader.png")
+
+    # What a person sees when they come back: the page holds what they gave.
+    page.reload()
+    expect(page.locator(f"input#{ANSWER}.score")).to_have_value(POINTS)
+    expect(page.locator(f"textarea#{ANSWER}-comment")).to_have_value(COMMENT)
+    page.close()
     check_folded(out, POINTS, COMMENT)
 
 
@@ -105,13 +116,13 @@ _RUN = "window.{flag}=1;fetch('/api/contents/{flag}.txt',{{method:'PUT'}})"
 
 
 def _hostile(course):
-    """ada's notebook with a script in every place a student controls that Formgrader shows."""
-    answer = (
+    """ada's notebook with a script in every place she controls that Formgrader shows."""
+    text = (
         f'See <img src=x onerror="{_RUN.format(flag="ANSWER_RAN")}"> and '
         f"[a link](javascript:{_RUN.format(flag='LINK_RAN')}) and [another][1]\n\n"
         f"[1]: jav&#x61;script:{_RUN.format(flag='REFERENCE_RAN')}\n"
     )
-    course.student.cells[-1] = answer_cell(answer)
+    course.student.cells.insert(-1, nbformat.v4.new_markdown_cell(text))
     shown = f"""\
 from IPython.display import HTML, Javascript, display, publish_display_data
 
@@ -133,46 +144,42 @@ display({{"image/svg+xml": svg}}, raw=True)
 
 
 def test_opening_a_hostile_submission_in_formgrader_runs_no_script_and_loads_nothing_else(
-    sandbox, browser, tmp_path
+    opened, browser
 ):
-    course = small_class(tmp_path)
-    _hostile(course)
-    out = tmp_path / "out"
-    course.grade(out)
+    _, out, server = opened
     flags = ["ANSWER_RAN", "LINK_RAN", "REFERENCE_RAN", "WIDTH_RAN", "OUTPUT_RAN", "SCRIPT_RAN",
              "SVG_RAN"]  # fmt: skip
-    with formgrader(out) as server:
-        page = browser.new_page(viewport={"width": 1400, "height": 900})
-        page.set_default_timeout(30_000)
-        requests, blocked = [], []
-        page.on("request", lambda request: requests.append(request.url))
-        page.on(
-            "console",
-            lambda message: (
-                blocked.append(message.text) if "Content Security Policy" in message.text else None
-            ),
-        )
-        page.goto(server.url())
-        page.get_by_role("link", name="Manual Grading").click()
-        page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()
-        page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()
-        page.get_by_role("link", name="Submission #1").wait_for()
-        page.get_by_text("Show All Names").click()  # Formgrader's own handler still works
-        page.get_by_role("link", name="ada", exact=True).click()
-        page.wait_for_url("**/formgrader/submissions/**")
-        page.locator(f"input#{ANSWER}.score").wait_for()
-        frame = page.main_frame
-        # The student's links, clicked as an instructor might.
-        for name in ("a link", "another"):
-            links = page.get_by_role("link", name=name, exact=True)
-            if links.count():
-                links.first.click()
-        page.wait_for_timeout(500)
-        ran = {flag: frame.evaluate(f"window.{flag} === 1") for flag in flags}
-        assert not any(ran.values()), ran
-        local = f"http://127.0.0.1:{server.port}/"
-        assert [url for url in requests if not url.startswith((local, "data:"))] == []
-        page.close()
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.set_default_timeout(30_000)
+    requests, blocked = [], []
+    page.on("request", lambda request: requests.append(request.url))
+    page.on(
+        "console",
+        lambda message: (
+            blocked.append(message.text) if "Content Security Policy" in message.text else None
+        ),
+    )
+    page.goto(server.url())
+    page.get_by_role("link", name="Manual Grading").click()
+    page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()
+    page.locator("#main-table").get_by_role("link", name=ASSIGNMENT).click()
+    page.get_by_role("link", name="Submission #1").wait_for()
+    page.get_by_text("Show All Names").click()  # Formgrader's own onclick still works
+    page.get_by_role("link", name="ada", exact=True).click()
+    page.wait_for_url("**/formgrader/submissions/**")
+    page.locator(f"input#{ANSWER}.score").wait_for()
+    frame = page.main_frame
+    # The student's links, clicked as an instructor might.
+    for name in ("a link", "another"):
+        links = page.get_by_role("link", name=name, exact=True)
+        if links.count():
+            links.first.click()
+    page.wait_for_timeout(500)
+    ran = {flag: frame.evaluate(f"window.{flag} === 1") for flag in flags}
+    assert not any(ran.values()), ran
+    local = f"http://127.0.0.1:{server.port}/"
+    assert [url for url in requests if not url.startswith((local, "data:"))] == []
+    page.close()
     written = [flag for flag in flags if (out / "work" / f"{flag}.txt").exists()]
     assert written == []
     # Formgrader's own scripts ran: the page showed the score box and the student's name.
