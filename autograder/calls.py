@@ -231,10 +231,14 @@ def serve(path: str) -> None:
 
     Each request and answer is a frame: an 8-byte big-endian length, then JSON text. The test's
     time limit interrupts the kernel (KeyboardInterrupt): the call then answers that the time
-    ran out, and the serving ends.
+    ran out, and the serving ends. The variables of :data:`PASSED_ENVIRONMENT` the calls set
+    are put back as they were when the test began.
     """
+    import os
     import socket
 
+    # The test's environment variables are the kernel's again once it is over.
+    before = {name: os.environ.get(name) for name in PASSED_ENVIRONMENT}
     connection = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
     try:
         connection.connect(path)
@@ -254,6 +258,7 @@ def serve(path: str) -> None:
         return
     finally:
         connection.close()
+        _set_environment(before)
 
 
 def _set_environment(values: Dict[str, Any]) -> None:

@@ -203,3 +203,42 @@ def test_the_robots_name_a_test_sets_is_the_one_the_students_code_reads(monkeypa
         {"VEHICLE_NAME": "autobot07"},
         {"VEHICLE_NAME": None},
     ]
+
+
+def test_the_kernel_serves_a_test_over_its_socket_and_keeps_its_own_robot_name(
+    tmp_path, monkeypatch
+):
+    import os
+    import socket
+    import threading
+    import types
+
+    import IPython
+
+    space = {"robot_topic": lambda name: f"/{os.environ['VEHICLE_NAME']}/{name}"}
+    monkeypatch.setattr(IPython, "get_ipython", lambda: types.SimpleNamespace(user_ns=space))
+    monkeypatch.setenv("VEHICLE_NAME", "kernels_own")
+    path = str(tmp_path / "socket")
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    listener.bind(path)
+    listener.listen(1)
+    serving = threading.Thread(target=calls.serve, args=(path,))
+    serving.start()
+    connection, _ = listener.accept()
+    stream = connection.makefile("rb")
+
+    def ask(request):
+        data = json.dumps(request).encode()
+        connection.sendall(len(data).to_bytes(8, "big") + data)
+        return json.loads(stream.read(int.from_bytes(stream.read(8), "big")))
+
+    handle = ask({"op": "get", "name": "robot_topic"})["value"]
+    got = ask({"op": "call", "target": handle[1], "args": ["l", [["s", "chatter"]]],
+               "kwargs": ["d", []], "environment": {"VEHICLE_NAME": "db21"}})  # fmt: skip
+    assert got == {"value": ["s", "/db21/chatter"]}
+    connection.sendall((3).to_bytes(8, "big") + b"end")
+    serving.join(timeout=10)
+    assert not serving.is_alive()
+    assert os.environ["VEHICLE_NAME"] == "kernels_own"
+    connection.close()
+    listener.close()
