@@ -150,6 +150,14 @@ class Collected:
         else:
             self.unsaid += 1
 
+    def cannot_take(self, name: str, count_limit: int, where: str) -> str:
+        """Why file ``name`` is not taken (its name is too long, or enough files were), or ""."""
+        if _too_long(name):
+            return _too_long(name)
+        if len(self.files) >= count_limit:
+            return f"{name} was left out: at most {count_limit} files are read from {where}."
+        return ""
+
     def close(self) -> Collected:
         """Say how many more were left out than were said; return this."""
         if self.unsaid:
@@ -213,13 +221,9 @@ def collect_folder(
                 collected.leave_out(f"{name} is {_kind(info.st_mode)}; it was left out.")
                 continue
             room = folder_limit - collected.size
-            if _too_long(name):
-                collected.leave_out(_too_long(name))
-                continue
-            if len(collected.files) >= count_limit:
-                collected.leave_out(
-                    f"{name} was left out: at most {count_limit} files are read from a folder."
-                )
+            why = collected.cannot_take(name, count_limit, "a folder")
+            if why:
+                collected.leave_out(why)
                 continue
             if info.st_size > file_limit:
                 collected.leave_out(
@@ -274,14 +278,9 @@ def unpack_zip(
                 if stat.S_IFMT(mode) not in (0, stat.S_IFREG):  # a link, a FIFO...
                     collected.leave_out(f"{member.filename} is {_kind(mode)}; it was left out.")
                     continue
-                if _too_long(name):
-                    collected.leave_out(_too_long(name))
-                    continue
-                if len(collected.files) >= count_limit:
-                    collected.leave_out(
-                        f"{name} was left out: at most {count_limit} files are read from an "
-                        "archive."
-                    )
+                why = collected.cannot_take(name, count_limit, "an archive")
+                if why:
+                    collected.leave_out(why)
                     continue
                 if collected.size + member.file_size > folder_limit:
                     collected.leave_out(
