@@ -31,8 +31,8 @@ from duckielib.errors import DuckielibError
 
 __all__ = [
     "Limits",
-    "cpu_share",
-    "end_cpu_share",
+    "end_student_groups",
+    "student_groups",
     "SandboxError",
     "SandboxUnavailable",
     "check_sandbox",
@@ -77,8 +77,10 @@ class Limits:
             every process of that user, so each student's grading uses a user of its own
             (:func:`unit_user`): a fork bomb cannot starve another student's sandbox.
         cpus: how many CPUs all of one student's sandboxed processes may use together, where
-            the machine lets the grader make control groups (:func:`cpu_share`): busy loops
-            a student leaves running slow only that student's grading.
+            the machine lets the grader make control groups (:func:`student_groups`): busy
+            loops a student leaves running slow only that student's grading.
+        total_memory_bytes: the memory all of one student's sandboxed processes may use
+            together (a control group, as ``cpus``).
     """
 
     cell_seconds: int = 60
@@ -92,42 +94,80 @@ class Limits:
     output_bytes: int = 256 * 1024**2
     uid: int = NOBODY
     cpus: float = 1.0
+    total_memory_bytes: int = 6 * 1024**3
 
 
-#: Where control groups of CPU time are made: cgroup v1's ``cpu`` controller, or cgroup v2.
-CGROUP_ROOTS = (Path("/sys/fs/cgroup/cpu"), Path("/sys/fs/cgroup"))
+#: Where the control groups of one student's sandboxes are made: cgroup v1's controllers (one
+#: folder each), or cgroup v2's single tree.
+CGROUP_V1 = Path("/sys/fs/cgroup")
+CGROUP_V2 = (Path("/sys/fs/cgroup/unified"), Path("/sys/fs/cgroup"))
+_PERIOD = 100_000
 
 
-def cpu_share(uid: int, cpus: float) -> Optional[Path]:
-    """The control group of user ``uid``'s sandboxes: at most ``cpus`` CPUs for all of them.
+def _v1_settings(limits: Limits) -> Dict[str, Dict[str, str]]:
+    quota = max(1000, int(limits.cpus * _PERIOD))
+    return {
+        "cpu": {"cpu.cfs_period_us": str(_PERIOD), "cpu.cfs_quota_us": str(quota)},
+        "memory": {"memory.limit_in_bytes": str(limits.total_memory_bytes)},
+        "pids": {"pids.max": str(limits.processes)},
+    }
 
-    Made on first use (the same group for every sandbox of one student's grading). Returns
-    None where the machine lets the grader make none (no cgroup controller for CPU, or no
-    right to write it): the per-process CPU time limit then still holds.
+
+def student_groups(limits: Limits) -> List[Path]:
+    """The control groups of user ``limits.uid``'s sandboxes, made on first use.
+
+    All of one student's sandboxed processes together may use at most ``limits.cpus`` CPUs,
+    ``limits.total_memory_bytes`` of memory and ``limits.processes`` processes. Where the
+    machine lets the grader make no control group (no controller, no right to write it), the
+    list is empty and the per-process limits (``prlimit``) and the per-user process limit
+    still hold.
     """
-    period = 100_000
-    quota = max(1000, int(cpus * period))
-    for root in CGROUP_ROOTS:
-        version_1 = (root / "cpu.cfs_quota_us").is_file()
-        version_2 = (root / "cgroup.subtree_control").is_file() and "cpu" in _text(
-            root / "cgroup.subtree_control"
-        ).split()
-        if not (version_1 or version_2):
+    name = f"duckie-{limits.uid}"
+    made: List[Path] = []
+    for controller, settings in _v1_settings(limits).items():
+        root = _own_group(controller)
+        if root is not None and _make(root / name, settings):
+            made.append(root / name)
+    if made:
+        return made
+    for root in CGROUP_V2:
+        enabled = _text(root / "cgroup.subtree_control").split()
+        if not {"cpu", "memory", "pids"} <= set(enabled):
             continue
-        group = root / f"duckie-{uid}"
-        try:
-            group.mkdir(exist_ok=True)
-            if version_1:
-                (group / "cpu.cfs_period_us").write_text(str(period))
-                (group / "cpu.cfs_quota_us").write_text(str(quota))
-            else:
-                (group / "cpu.max").write_text(f"{quota} {period}")
-        except OSError:
-            with contextlib.suppress(OSError):
-                group.rmdir()
-            continue
-        return group
+        settings = {
+            "cpu.max": f"{max(1000, int(limits.cpus * _PERIOD))} {_PERIOD}",
+            "memory.max": str(limits.total_memory_bytes),
+            "pids.max": str(limits.processes),
+        }
+        if _make(root / name, settings):
+            return [root / name]
+    return []
+
+
+def _own_group(controller: str) -> Optional[Path]:
+    """The folder of this process's own cgroup v1 group of ``controller``, if it has one.
+
+    A student's group is made inside it, so whatever limits the grader's own group has (a
+    container's memory) hold for the students' too.
+    """
+    for line in _text(Path("/proc/self/cgroup")).splitlines():
+        _, controllers, path = line.split(":", 2)
+        if controller in controllers.split(","):
+            folder = CGROUP_V1 / controller / path.lstrip("/")
+            return folder if (folder / "cgroup.procs").is_file() else None
     return None
+
+
+def _make(group: Path, settings: Dict[str, str]) -> bool:
+    try:
+        group.mkdir(exist_ok=True)
+        for file, value in settings.items():
+            (group / file).write_text(value)
+    except OSError:
+        with contextlib.suppress(OSError):
+            group.rmdir()
+        return False
+    return True
 
 
 def _text(path: Path) -> str:
@@ -137,22 +177,27 @@ def _text(path: Path) -> str:
         return ""
 
 
-def joined(group: Optional[Path], command: Sequence[str]) -> List[str]:
-    """``command``, started from within ``group`` (so are all the processes it starts)."""
-    if group is None:
+def joined(groups: Sequence[Path], command: Sequence[str]) -> List[str]:
+    """``command``, started from within ``groups`` (so are all the processes it starts)."""
+    if not groups:
         return list(command)
-    # The shell moves itself into the group, then becomes the command.
-    script = 'echo $$ > "$0" && exec "$@"'
-    return ["/bin/sh", "-c", script, str(group / "cgroup.procs"), *command]
+    # The shell moves itself into each group, then becomes the command.
+    script = 'for group in "$@"; do [ "$group" = -- ] && break; echo $$ > "$group"; shift; done'
+    script += '; shift; exec "$@"'
+    procs = [str(group / "cgroup.procs") for group in groups]
+    return ["/bin/sh", "-c", script, "sh", *procs, "--", *command]
 
 
-def end_cpu_share(uid: int) -> None:
-    """Kill what is left in user ``uid``'s control group, and remove the group."""
+def end_student_groups(uid: int) -> None:
+    """Kill what is left in user ``uid``'s control groups, and remove them."""
     import signal
     import time
 
-    for root in CGROUP_ROOTS:
-        group = root / f"duckie-{uid}"
+    name = f"duckie-{uid}"
+    owners = [_own_group(controller) for controller in ("cpu", "memory", "pids")]
+    candidates = [owner / name for owner in owners if owner is not None]
+    candidates += [root / name for root in CGROUP_V2]
+    for group in candidates:
         if not group.is_dir():
             continue
         for _ in range(50):
@@ -374,7 +419,7 @@ def run(
         given.write((stdin or "").encode("utf-8"))
         given.seek(0)
         if use_sandbox:
-            command = joined(cpu_share(limits.uid, limits.cpus), command)
+            command = joined(student_groups(limits), command)
         process = subprocess.Popen(
             list(command),
             stdin=given,

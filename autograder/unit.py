@@ -363,11 +363,11 @@ class _Server:
                 course=self.folder,
                 shared=(self.shared, SHARED_INSIDE),
             )
-        from autograder.sandbox import cpu_share, joined
+        from autograder.sandbox import joined, student_groups
 
         self.errors = tempfile.TemporaryFile()  # noqa: SIM115 - open for the sandbox's life
         if self.use_sandbox:
-            command = joined(cpu_share(self.limits.uid, self.limits.cpus), command)
+            command = joined(student_groups(self.limits), command)
         return subprocess.Popen(
             command,
             stdin=subprocess.PIPE,
@@ -615,9 +615,9 @@ class _Unit:
             return self._grade(api, config, began)
         finally:
             self.server.stop()
-            from autograder.sandbox import end_cpu_share
+            from autograder.sandbox import end_student_groups
 
-            end_cpu_share(self.limits.uid)
+            end_student_groups(self.limits.uid)
 
     def _grade(self, api: Any, config: Any, began: float) -> Dict[str, Any]:
         aside: List[str] = []
