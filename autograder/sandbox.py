@@ -188,6 +188,24 @@ def joined(groups: Sequence[Path], command: Sequence[str]) -> List[str]:
     return ["/bin/sh", "-c", script, "sh", *procs, "--", *command]
 
 
+def _remove_when_empty(groups: Sequence[Path]) -> None:
+    """Remove the groups once the processes just killed in them are gone (0.1 s at most).
+
+    A group another sandbox of the same student still uses stays (its unit removes it).
+    """
+    import time
+
+    for group in groups:
+        for _ in range(10):
+            try:
+                group.rmdir()
+                break
+            except FileNotFoundError:
+                break
+            except OSError:
+                time.sleep(0.01)
+
+
 def end_student_groups(uid: int) -> None:
     """Kill what is left in user ``uid``'s control groups, and remove them."""
     import signal
@@ -418,8 +436,8 @@ def run(
     ) as err:
         given.write((stdin or "").encode("utf-8"))
         given.seek(0)
-        if use_sandbox:
-            command = joined(student_groups(limits), command)
+        groups = student_groups(limits) if use_sandbox else []
+        command = joined(groups, command)
         process = subprocess.Popen(
             list(command),
             stdin=given,
@@ -442,6 +460,7 @@ def run(
             # What it left behind in its session (without the sandbox).
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(process.pid, signal.SIGKILL)
+            _remove_when_empty(groups)
         texts = [_bounded_text(handle, limits.output_bytes) for handle in (out, err)]
     return subprocess.CompletedProcess(list(command), process.returncode, texts[0], texts[1])
 

@@ -80,54 +80,72 @@ def run_unit(
         :func:`autograder.results.to_data` writes it; when the unit itself stopped (its time
         limit, a crash), a result with ``complete`` false and a sentence saying why.
     """
-    from autograder.files import write_files
+    from autograder.sandbox import end_student_groups, unit_user
 
     seconds = unit_seconds(task)
+    # The student's user id, chosen here: whatever ends the unit, its control groups go with it.
+    uid = unit_user()
     with tempfile.TemporaryDirectory(prefix="duckie-unit-", dir=scratch) as folder:
-        base = Path(folder)
-        write_files(base / "submission", files)
-        (base / "task.json").write_text(
-            json.dumps({**task, "course_dir": str(course)}), encoding="utf-8"
-        )
-        command = [sys.executable, "-m", "autograder.unit", str(base)]
-        stopped = None
         try:
-            finished = subprocess.run(
-                command,
-                capture_output=True,
-                text=True,
-                timeout=seconds,
-                check=False,
-                preexec_fn=_pdeathsig,
+            return _run_unit(task, files, course, Path(folder), seconds, uid)
+        finally:
+            end_student_groups(uid)
+
+
+def _run_unit(
+    task: Dict[str, Any],
+    files: Dict[str, bytes],
+    course: Path,
+    base: Path,
+    seconds: float,
+    uid: int,
+) -> Dict[str, Any]:
+    """:func:`run_unit` in folder ``base``, the student running as user ``uid``."""
+    from autograder.files import write_files
+
+    write_files(base / "submission", files)
+    (base / "task.json").write_text(
+        json.dumps({**task, "course_dir": str(course), "uid": uid}), encoding="utf-8"
+    )
+    command = [sys.executable, "-m", "autograder.unit", str(base)]
+    stopped = None
+    try:
+        finished = subprocess.run(
+            command,
+            capture_output=True,
+            text=True,
+            timeout=seconds,
+            check=False,
+            preexec_fn=_pdeathsig,
+        )
+        if finished.returncode != 0 or not (base / "result.json").is_file():
+            lines = [line for line in finished.stderr.splitlines() if line.strip()]
+            stopped = (
+                f"the grader's process for this student stopped ({lines[-1][:300]})"
+                if lines
+                else f"the grader's process for this student ended with {finished.returncode}"
             )
-            if finished.returncode != 0 or not (base / "result.json").is_file():
-                lines = [line for line in finished.stderr.splitlines() if line.strip()]
-                stopped = (
-                    f"the grader's process for this student stopped ({lines[-1][:300]})"
-                    if lines
-                    else f"the grader's process for this student ended with {finished.returncode}"
-                )
-        except subprocess.TimeoutExpired:
-            stopped = f"the grading of this student took more than {seconds:.0f} s and was stopped"
-        if stopped is not None:
-            return {
-                "result": {
-                    "student": task["student"],
-                    "cells": {},
-                    "problems": [f"Grading stopped: {stopped}; run duckie grade again to retry."],
-                    "messages": {},
-                    "missions": {},
-                    "complete": False,
-                },
-                "autograded": {},
-            }
-        answer = json.loads((base / "result.json").read_text(encoding="utf-8"))
-        autograded = {}
-        for name in task["names"]:
-            path = base / "autograded" / f"{name}.ipynb"
-            if path.is_file():
-                autograded[name] = path.read_text(encoding="utf-8")
-        return {"result": answer, "autograded": autograded}
+    except subprocess.TimeoutExpired:
+        stopped = f"the grading of this student took more than {seconds:.0f} s and was stopped"
+    if stopped is not None:
+        return {
+            "result": {
+                "student": task["student"],
+                "cells": {},
+                "problems": [f"Grading stopped: {stopped}; run duckie grade again to retry."],
+                "messages": {},
+                "missions": {},
+                "complete": False,
+            },
+            "autograded": {},
+        }
+    answer = json.loads((base / "result.json").read_text(encoding="utf-8"))
+    autograded = {}
+    for name in task["names"]:
+        path = base / "autograded" / f"{name}.ipynb"
+        if path.is_file():
+            autograded[name] = path.read_text(encoding="utf-8")
+    return {"result": answer, "autograded": autograded}
 
 
 # What follows runs in the unit's own process.
@@ -552,7 +570,8 @@ class _Unit:
         self.names: List[str] = list(self.task["names"])
         self.course: List[str] = list(self.task["course"])
         # A user of its own: the process limit then counts this student's processes only.
-        self.limits = dataclasses.replace(Limits(**self.task["limits"]), uid=unit_user())
+        uid = int(self.task.get("uid") or unit_user())
+        self.limits = dataclasses.replace(Limits(**self.task["limits"]), uid=uid)
         self.use_sandbox = bool(self.task["use_sandbox"])
         self.course_dir = Path(self.task["course_dir"])
         self.root = self.folder / "nbgrader"
