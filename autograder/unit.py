@@ -163,7 +163,7 @@ def _sandboxed_execute_class(unit: _Unit):
             name = resources["nbgrader"]["assignment"]
             began = time.monotonic()
             sent, tests = _remote_tests(nb)
-            run = _TestsHere(unit, nb.cells)
+            run = _TestsHere(unit, nb.cells, set(tests.values()))
             text, problem = unit.server.run(name, nbformat.writes(sent), run.test)
             executed = None
             if text is not None:
@@ -241,24 +241,27 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     sent = copy.deepcopy(notebook)
     tests: Dict[int, str] = {}
     for index, cell in enumerate(sent.cells):
+        cell.get("metadata", {}).pop(METADATA_KEY, None)  # only the grader marks a cell
         meta = cell.get("metadata", {}).get("nbgrader", {})
         grade_id = meta.get("grade_id", "")
         if cell.cell_type != "code" or not meta.get("grade") or meta.get("solution"):
             continue
-        if grade_id in KERNEL_TESTS or grade_id in tests.values():
+        if grade_id in KERNEL_TESTS:
             continue
-        cell.source = ""
-        cell.metadata[METADATA_KEY] = {"remote": True}
-        tests[index] = grade_id
+        cell.source = ""  # a copy of a test (never left by the repair) is sent empty too
+        if grade_id not in tests.values():
+            cell.metadata[METADATA_KEY] = {"remote": True}
+            tests[index] = grade_id
     return sent, tests
 
 
 class _TestsHere:
     """Runs a notebook's tests in the unit's process, as the sandbox reaches each of them."""
 
-    def __init__(self, unit: Any, cells: List[Any]) -> None:
+    def __init__(self, unit: Any, cells: List[Any], tests: Any) -> None:
         self.unit = unit
         self.cells = cells
+        self.tests = tests
         self.sources = {
             cell.metadata.get("nbgrader", {}).get("grade_id"): cell.source
             for cell in cells
@@ -268,8 +271,11 @@ class _TestsHere:
         self.outputs: Dict[str, List[Dict[str, Any]]] = {}
 
     def test(self, grade_id: str, ask: Any) -> None:
+        """Run test ``grade_id`` (one the grader sent empty), asking the kernel through ``ask``."""
         from autograder.calls import Link, prelude, run_test
 
+        if grade_id not in self.tests:
+            return
         if self.space is None:
             self.space = prelude(self.cells)
         seconds = self.unit.limits.cell_seconds

@@ -242,3 +242,26 @@ def test_the_kernel_serves_a_test_over_its_socket_and_keeps_its_own_robot_name(
     assert os.environ["VEHICLE_NAME"] == "kernels_own"
     connection.close()
     listener.close()
+
+
+def test_only_the_grader_marks_the_tests_it_runs_and_none_of_their_code_is_sent():
+    import nbformat
+
+    from autograder.unit import _remote_tests
+
+    test = {"grade": True, "solution": False, "grade_id": "test_f", "points": 1}
+    notebook = nbformat.v4.new_notebook()
+    notebook.cells = [
+        nbformat.v4.new_code_cell("def f(x):\n    return x", metadata={}),
+        # A student's cell that claims to be a test the grader runs.
+        nbformat.v4.new_code_cell("print('mine')", metadata={"duckie_grading": {"remote": True}}),
+        nbformat.v4.new_code_cell("assert f(1) == 1  # SECRET", metadata={"nbgrader": test}),
+        nbformat.v4.new_code_cell("assert f(2) == 2  # SECRET", metadata={"nbgrader": test}),
+    ]
+    sent, tests = _remote_tests(notebook)
+    assert tests == {2: "test_f"}
+    assert "SECRET" not in nbformat.writes(sent)
+    assert [cell.metadata.get("duckie_grading") for cell in sent.cells] == [
+        None, None, {"remote": True}, None,
+    ]  # fmt: skip
+    assert "SECRET" in notebook.cells[2].source  # the grader's own copy keeps the test
