@@ -251,8 +251,9 @@ def serve(path: str) -> None:
             if data == b"end":
                 return
             reply = answer(data.decode("utf-8"))
-            connection.sendall(len(reply.encode()).to_bytes(8, "big") + reply.encode())
-            if '"broken"' in reply[:12]:
+            raw = reply.encode("utf-8")
+            connection.sendall(len(raw).to_bytes(8, "big") + raw)
+            if reply.startswith('{"broken"'):
                 return
     except KeyboardInterrupt:
         return

@@ -220,14 +220,14 @@ def _guarded_client_class():
 
             if not getattr(self, "calls_ready", False):
                 self.calls_ready = True
-                await self._run_hidden(_calls_setup(), index, text=True)
+                await self._run_hidden(_calls_setup(), index)
             relay = _Relay(self.channel, self.timeout or 60)
             try:
                 self.channel.say({"test": grade_id})
                 talk = asyncio.ensure_future(asyncio.to_thread(relay.run))
                 try:
                     code = f"__import__('sys').modules[{KERNEL_MODULE!r}].serve({relay.path!r})"
-                    await self._run_hidden(code, index, text=True)
+                    await self._run_hidden(code, index)
                 finally:
                     relay.kernel_done(_no_answer(self.last_probe))
                     await talk
@@ -237,7 +237,7 @@ def _guarded_client_class():
             self.code_cells_executed += 1
             cell.execution_count = self.code_cells_executed
 
-        async def _run_hidden(self, source, index, text=False):
+        async def _run_hidden(self, source, index):
             """Run ``source`` in the kernel without a cell of its own; its value, if a list."""
             real = self.nb.cells[index]
             probe = nbformat.v4.new_code_cell(source)
@@ -247,19 +247,13 @@ def _guarded_client_class():
                 self.nb.cells[index] = real  # nbclient puts the executed cell at the index
             self.last_probe = probe
             for output in probe.get("outputs", []):
-                if output.get("output_type") == "execute_result" and text:
-                    try:
-                        value = ast.literal_eval(output["data"].get("text/plain", ""))
-                    except (ValueError, SyntaxError, MemoryError, RecursionError):
-                        return None
-                    return value if isinstance(value, str) else None
                 if output.get("output_type") == "execute_result":
                     try:
                         value = ast.literal_eval(output["data"].get("text/plain", ""))
                     except (ValueError, SyntaxError):
                         return []
                     return [str(item) for item in value] if isinstance(value, list) else []
-            return None if text else []
+            return []
 
     return GuardedClient
 
@@ -1238,10 +1232,10 @@ def serve(cell_seconds: int, sandboxed: bool) -> None:
             reply = {"notebook": nbformat.writes(notebook)}
         except Exception as error:  # the grader reports it for this notebook
             reply = {"problem": f"could not be run: {type(error).__name__}: {error}"}
+            if sandboxed:
+                _kill_strays(keep)
         answer.write(frame(json.dumps(reply).encode("utf-8")))
         answer.flush()
-        if sandboxed:
-            _kill_strays(keep)
     _end(zygote)
 
 

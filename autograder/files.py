@@ -152,8 +152,9 @@ class Collected:
 
     def cannot_take(self, name: str, count_limit: int, where: str) -> str:
         """Why file ``name`` is not taken (its name is too long, or enough files were), or ""."""
-        if _too_long(name):
-            return _too_long(name)
+        too_long = _too_long(name)
+        if too_long:
+            return too_long
         if len(self.files) >= count_limit:
             return f"{name} was left out: at most {count_limit} files are read from {where}."
         return ""

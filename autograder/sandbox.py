@@ -104,10 +104,14 @@ CGROUP_V2 = (Path("/sys/fs/cgroup/unified"), Path("/sys/fs/cgroup"))
 _PERIOD = 100_000
 
 
+def _quota(limits: Limits) -> int:
+    """The CPU time the student's processes may use per :data:`_PERIOD`, in microseconds."""
+    return max(1000, int(limits.cpus * _PERIOD))
+
+
 def _v1_settings(limits: Limits) -> Dict[str, Dict[str, str]]:
-    quota = max(1000, int(limits.cpus * _PERIOD))
     return {
-        "cpu": {"cpu.cfs_period_us": str(_PERIOD), "cpu.cfs_quota_us": str(quota)},
+        "cpu": {"cpu.cfs_period_us": str(_PERIOD), "cpu.cfs_quota_us": str(_quota(limits))},
         "memory": {"memory.limit_in_bytes": str(limits.total_memory_bytes)},
         "pids": {"pids.max": str(limits.processes)},
     }
@@ -135,7 +139,7 @@ def student_groups(limits: Limits) -> List[Path]:
         if not {"cpu", "memory", "pids"} <= set(enabled):
             continue
         settings = {
-            "cpu.max": f"{max(1000, int(limits.cpus * _PERIOD))} {_PERIOD}",
+            "cpu.max": f"{_quota(limits)} {_PERIOD}",
             "memory.max": str(limits.total_memory_bytes),
             "pids.max": str(limits.processes),
         }
@@ -188,46 +192,46 @@ def joined(groups: Sequence[Path], command: Sequence[str]) -> List[str]:
     return ["/bin/sh", "-c", script, "sh", *procs, "--", *command]
 
 
+def _remove(group: Path, tries: int, kill: bool = False) -> None:
+    """Remove ``group`` once no process is left in it, trying ``tries`` times 10 ms apart.
+
+    With ``kill``, every process still in it is killed first at each try.
+    """
+    import signal
+    import time
+
+    for _ in range(tries):
+        if kill:
+            for pid in _text(group / "cgroup.procs").split():
+                with contextlib.suppress(OSError, ValueError):
+                    os.kill(int(pid), signal.SIGKILL)
+        try:
+            group.rmdir()
+            return
+        except FileNotFoundError:
+            return
+        except OSError:
+            time.sleep(0.01)
+
+
 def _remove_when_empty(groups: Sequence[Path]) -> None:
     """Remove the groups once the processes just killed in them are gone (0.1 s at most).
 
     A group another sandbox of the same student still uses stays (its unit removes it).
     """
-    import time
-
     for group in groups:
-        for _ in range(10):
-            try:
-                group.rmdir()
-                break
-            except FileNotFoundError:
-                break
-            except OSError:
-                time.sleep(0.01)
+        _remove(group, tries=10)
 
 
 def end_student_groups(uid: int) -> None:
     """Kill what is left in user ``uid``'s control groups, and remove them."""
-    import signal
-    import time
-
     name = f"duckie-{uid}"
     owners = [_own_group(controller) for controller in ("cpu", "memory", "pids")]
     candidates = [owner / name for owner in owners if owner is not None]
     candidates += [root / name for root in CGROUP_V2]
     for group in candidates:
-        if not group.is_dir():
-            continue
-        for _ in range(50):
-            pids = [int(line) for line in _text(group / "cgroup.procs").split() if line.isdigit()]
-            for pid in pids:
-                with contextlib.suppress(OSError):
-                    os.kill(pid, signal.SIGKILL)
-            try:
-                group.rmdir()
-                break
-            except OSError:
-                time.sleep(0.02)
+        if group.is_dir():
+            _remove(group, tries=100, kill=True)
 
 
 def unit_user() -> int:

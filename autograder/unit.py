@@ -163,7 +163,7 @@ def _sandboxed_execute_class(unit: _Unit):
             name = resources["nbgrader"]["assignment"]
             began = time.monotonic()
             sent, tests = _remote_tests(nb)
-            run = _TestsHere(unit, nb.cells, set(tests.values()))
+            run = _TestsHere(unit, nb.cells, tests)
             text, problem = unit.server.run(name, nbformat.writes(sent), run.test)
             executed = None
             if text is not None:
@@ -211,6 +211,12 @@ def _sandboxed_execute_class(unit: _Unit):
 _NOT_RUN_TEST = "This test did not run: the notebook's kernel stopped before it."
 
 
+def _is_test(cell: Any) -> bool:
+    """Whether ``cell`` is a test cell (code nbgrader grades that is not an answer)."""
+    meta = cell.get("metadata", {}).get("nbgrader", {})
+    return cell.cell_type == "code" and bool(meta.get("grade")) and not meta.get("solution")
+
+
 def _stderr_is_no_failure(executed: Any, sent: Any) -> None:
     """Show what a test run in the kernel wrote on stderr as ordinary output.
 
@@ -218,8 +224,7 @@ def _stderr_is_no_failure(executed: Any, sent: Any) -> None:
     student's correct code would cost the test. Which cells are tests comes from ``sent``.
     """
     for index, cell in enumerate(sent.cells):
-        meta = cell.get("metadata", {}).get("nbgrader", {})
-        if cell.cell_type != "code" or not meta.get("grade") or meta.get("solution"):
+        if not _is_test(cell):
             continue
         for output in executed.cells[index].get("outputs", []):
             if output.get("output_type") == "stream" and output.get("name") == "stderr":
@@ -242,11 +247,8 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     tests: Dict[int, str] = {}
     for index, cell in enumerate(sent.cells):
         cell.get("metadata", {}).pop(METADATA_KEY, None)  # only the grader marks a cell
-        meta = cell.get("metadata", {}).get("nbgrader", {})
-        grade_id = meta.get("grade_id", "")
-        if cell.cell_type != "code" or not meta.get("grade") or meta.get("solution"):
-            continue
-        if grade_id in KERNEL_TESTS:
+        grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
+        if not _is_test(cell) or grade_id in KERNEL_TESTS:
             continue
         cell.source = ""  # a copy of a test (never left by the repair) is sent empty too
         if grade_id not in tests.values():
@@ -258,15 +260,10 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
 class _TestsHere:
     """Runs a notebook's tests in the unit's process, as the sandbox reaches each of them."""
 
-    def __init__(self, unit: Any, cells: List[Any], tests: Any) -> None:
+    def __init__(self, unit: Any, cells: List[Any], tests: Dict[int, str]) -> None:
         self.unit = unit
         self.cells = cells
-        self.tests = tests
-        self.sources = {
-            cell.metadata.get("nbgrader", {}).get("grade_id"): cell.source
-            for cell in cells
-            if cell.cell_type == "code"
-        }
+        self.sources = {grade_id: cells[index].source for index, grade_id in tests.items()}
         self.space: Optional[Dict[str, Any]] = None
         self.outputs: Dict[str, List[Dict[str, Any]]] = {}
 
@@ -274,7 +271,7 @@ class _TestsHere:
         """Run test ``grade_id`` (one the grader sent empty), asking the kernel through ``ask``."""
         from autograder.calls import Link, prelude, run_test
 
-        if grade_id not in self.tests:
+        if grade_id not in self.sources:
             return
         if self.space is None:
             self.space = prelude(self.cells)
@@ -289,9 +286,7 @@ class _TestsHere:
         saved = tempfile.tempdir
         tempfile.tempdir = str(self.unit.shared)
         try:
-            self.outputs[grade_id] = run_test(
-                self.sources.get(grade_id, ""), grade_id, self.space, link
-            )
+            self.outputs[grade_id] = run_test(self.sources[grade_id], grade_id, self.space, link)
         finally:
             tempfile.tempdir = saved
         self.unit.timings["calls"] = self.unit.timings.get("calls", 0) + link.calls
@@ -401,9 +396,7 @@ class _Server:
             start_new_session=True,
         )
 
-    def run(  # noqa: PLR0911, PLR0915 - the conversation with the sandbox, in one place
-        self, name: str, text: str, tests: Any = None
-    ) -> Tuple[Optional[str], str]:
+    def run(self, name: str, text: str, tests: Any = None) -> Tuple[Optional[str], str]:
         """Run notebook ``name`` (its folder's name); its executed text, or None and why.
 
         Args:
@@ -436,14 +429,14 @@ class _Server:
                     if "notebook" in got or "problem" in got:
                         final.append(got)
                         raise CallsBroken("the notebook's kernel stopped during the test")
-            except TimeoutError:
+            except TimeoutError as error:
                 if time.monotonic() < deadline:
                     raise CallsBroken(
                         f"the test ran out of the {cell_seconds} s a cell may take"
                     ) from None
-                raise Abandon("time") from None
-            except (OSError, EOFError, ValueError):
-                raise Abandon("stopped") from None
+                raise Abandon from error
+            except (OSError, EOFError, ValueError, _TooMuch) as error:
+                raise Abandon from error
 
         try:
             _write_all(self.process.stdin, request, deadline)
@@ -457,32 +450,27 @@ class _Server:
                     _write_all(self.process.stdin, frame(b'{"end": true}'), deadline)
                 elif "answer" not in reply and "test" not in reply:
                     break
-        except _TooMuch as too_much:
-            self.stop()
-            return None, f"answered with {too_much} bytes, more than the grader reads"
-        except Abandon as abandon:
-            if str(abandon) != "time":
-                why = self._last_words() or "stopped with no output"
-                self.stop()
-                return None, why
-            self.stop()
-            return None, (
-                f"ran out of its {seconds} s (all cells and the kernel's start); the cells "
-                "after that never ran"
-            )
-        except TimeoutError:
-            self.stop()
-            return None, (
-                f"ran out of its {seconds} s (all cells and the kernel's start); the cells "
-                "after that never ran"
-            )
-        except (OSError, EOFError, ValueError):
-            why = self._last_words() or "stopped with no output"
-            self.stop()
-            return None, why
+        except (TimeoutError, OSError, EOFError, ValueError, _TooMuch, Abandon) as error:
+            # A test's call that could not go on ended the run the same ways.
+            cause = error.__cause__ if isinstance(error, Abandon) else error
+            return None, self._ended(cause, seconds)
         if "notebook" not in reply:
             return None, str(reply.get("problem", "gave no notebook"))[:500]
         return str(reply["notebook"]), ""
+
+    def _ended(self, error: Optional[BaseException], seconds: float) -> str:
+        """End the sandbox after its run stopped with ``error``; why, in a sentence."""
+        if isinstance(error, _TooMuch):
+            why = f"answered with {error} bytes, more than the grader reads"
+        elif isinstance(error, TimeoutError):
+            why = (
+                f"ran out of its {seconds} s (all cells and the kernel's start); the cells "
+                "after that never ran"
+            )
+        else:
+            why = self._last_words() or "stopped with no output"
+        self.stop()
+        return why
 
     def _reply(self, deadline: float) -> Dict[str, Any]:
         """The sandbox's next message; TimeoutError, EOFError, ValueError or _TooMuch."""
