@@ -204,13 +204,28 @@ def run_all_in_the_browser(page, port, name):
             dialogs += shown
             if any(text.startswith("Select Kernel") for text in shown):
                 page.locator(".jp-Dialog .jp-mod-accept").first.click()
+                page.wait_for_selector(idle, timeout=60_000)  # the kernel taken has started
             else:
                 page.keyboard.press("Escape")
     else:
         pytest.fail(f"Run All of {name} never began; dialogs: {dialogs or 'none'}")
     if dialogs:
         warnings.warn(f"{name}: JupyterLab showed a dialog before Run All: {dialogs}", stacklevel=2)
-    page.wait_for_function(FINISHED, arg=[PROMPTS, STDERR], polling=POLL_MS, timeout=180_000)
+    try:
+        page.wait_for_function(FINISHED, arg=[PROMPTS, STDERR], polling=POLL_MS, timeout=180_000)
+    except PlaywrightTimeout:
+        # Say where it stood: which cells waited, what the kernel was doing, what dialog was up.
+        prompts = page.locator(PROMPTS).all_inner_texts()
+        waiting = [i for i, prompt in enumerate(prompts) if "*" in prompt]
+        never = [i for i, prompt in enumerate(prompts) if not re.search(r"\[\d+\]", prompt)]
+        status = page.locator(f"{SHOWN} .jp-Notebook-ExecutionIndicator").get_attribute(
+            "data-status"
+        )
+        pytest.fail(
+            f"Run All of {name} did not end within 180 s: kernel {status}, code cells "
+            f"waiting {waiting}, never run {never} of {len(prompts)}; dialogs "
+            f"{page.locator('.jp-Dialog').all_inner_texts() or 'none'}"
+        )
 
 
 def test_run_all_in_jupyterlab_runs_notebook_07_without_an_error(student_lab, browser):
