@@ -48,13 +48,12 @@ import os
 import re
 import shutil
 import subprocess
-import sys
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, Dict, Iterator, List, Optional, Sequence
 
-from autograder.sandbox import Limits, run
+from autograder.sandbox import Limits, started
 
 __all__ = [
     "BAG_LIMIT",
@@ -216,38 +215,64 @@ def drive_missions(
 def drive(
     folder: Path, limits: Limits, use_sandbox: bool = True, mission: str = "square_then_circle"
 ) -> Driving:
-    """Run ``mission`` in a sandbox with the solution ``folder/solution.py``; score its bag.
+    """Drive ``mission`` with the solution ``folder/solution.py`` and score the run's bag.
+
+    The virtual Duckiebot runs here, in the grader's process, and records the bag into a
+    folder of the grader's; the solution's nodes run in the sandbox and reach the robot only
+    through topics and services (:mod:`duckielib.tools.apart`).
 
     Args:
         folder: a folder the sandbox's user may write, holding ``solution.py`` (an export).
         limits: the sandbox's limits; the mission has ``limits.mission_seconds`` of wall time.
         use_sandbox: whether to run in the sandbox (off only with ``duckie grade --no-sandbox``).
-        mission: the mission to drive; the run writes ``folder/MISSION/``.
+        mission: the mission to drive; the nodes' process works in ``folder/MISSION/``.
 
     Returns:
         The driving score with its reasons.
     """
-    command = [sys.executable, "-m", "duckielib.tools.cli", "mission", "--solution", "solution.py"]
-    command += ["--mission", mission, "--out", mission, "--no-animation", "--no-figure"]
-    command += ["--stall-limit", str(limits.stall_seconds)]
-    run_folder = folder / mission
-    try:
-        result = run(
-            command,
-            folder,
-            limits,
-            limits.mission_seconds,
-            use_sandbox=use_sandbox,
-            env={"VEHICLE_NAME": ROBOT},
+    import contextlib
+
+    from duckielib.missions import mission_named
+    from duckielib.tools.apart import OutOfWallTime, drive_apart, nodes_command
+    from duckielib.tools.runner import DEFAULT_TIME_LIMIT_S
+
+    chosen = mission_named(mission)
+    said: List[str] = []
+
+    @contextlib.contextmanager
+    def start_nodes(sock: Any) -> Iterator[Any]:
+        fd = sock.fileno()
+        command = nodes_command(fd, "solution.py", mission, stall_limit=limits.stall_seconds)
+        env = {"VEHICLE_NAME": ROBOT}
+        with started(command, folder, limits, use_sandbox, env=env, pass_fds=(fd,)) as running:
+            yield running
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                running.process.wait(timeout=5)
+            said.append(running.outputs()[1])
+
+    with tempfile.TemporaryDirectory(prefix="driving-") as scratch:
+        files = {"bag": Path(scratch) / "mission.bag", "log": Path(scratch) / "log.txt"}
+        *_, failure = drive_apart(
+            start_nodes,
+            chosen,
+            "ideal",
+            0,
+            files,
+            DEFAULT_TIME_LIMIT_S,
+            wall_limit=limits.mission_seconds,
         )
-    except subprocess.TimeoutExpired:
-        why = f"The mission did not end within {limits.mission_seconds} s of wall time."
-        driving = _score_unfinished(run_folder, mission, why)
-        driving.timed_out = True
+        if failure is None:
+            return _score_copy(files["bag"], mission)
+        timed_out = isinstance(failure, OutOfWallTime)
+        if timed_out:
+            why = f"The mission did not end within {limits.mission_seconds} s of wall time."
+        elif "process stopped answering" in str(failure) and said and said[0].strip():
+            why = _failure(said[0])  # it died: its last words say more than the broken link
+        else:
+            why = f"The mission could not run to its end: {_without_paths(str(failure))}"
+        driving = _score_stopped(files["bag"], mission, why)
+        driving.timed_out = timed_out
         return driving
-    if result.returncode != 0:
-        return _score_unfinished(run_folder, mission, _failure(result.stderr))
-    return score_bag(run_folder, mission)
 
 
 def _score_unfinished(run: Path, mission: str, why: str) -> Driving:
@@ -277,7 +302,13 @@ def _score_unfinished(run: Path, mission: str, why: str) -> Driving:
                 repair_bag(active, bag)
             except (DuckielibError, ValueError, OSError):
                 return Driving(out_of=out_of, reasons=[why])
-        driving = _score_copy(bag, mission)
+        return _score_stopped(bag, mission, why)
+
+
+def _score_stopped(bag: Path, mission: str, why: str) -> Driving:
+    """Score the bag of a run that stopped early (the grader's own file), ``why`` first."""
+    out_of = part_points(mission)
+    driving = _score_copy(bag, mission) if bag.is_file() else Driving(out_of=out_of)
     if not driving.parts.get("bag"):  # nothing of the mission reached the bag
         return Driving(out_of=out_of, reasons=[why])
     driving.finished = False

@@ -25,7 +25,7 @@ import subprocess
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
 from duckielib.errors import DuckielibError
 
@@ -394,6 +394,79 @@ def sandboxed_command(
     return args + list(command)
 
 
+class Started:
+    """A command started by :func:`started`: its process and where its output goes.
+
+    Attributes:
+        process: the running process.
+        stdout: the captured standard output, read once it has ended (:meth:`outputs`).
+        stderr: the captured standard error, likewise.
+    """
+
+    def __init__(self, process: subprocess.Popen, out, err, limit: int) -> None:
+        self.process = process
+        self._files = (out, err)
+        self._limit = limit
+
+    def outputs(self) -> Tuple[str, str]:
+        """What it printed, as text, each cut at the sandbox's output limit."""
+        out, err = (_bounded_text(handle, self._limit) for handle in self._files)
+        return out, err
+
+
+@contextlib.contextmanager
+def started(
+    command: Sequence[str],
+    folder: Path,
+    limits: Limits,
+    use_sandbox: bool = True,
+    stdin: Optional[str] = None,
+    env: Optional[Dict[str, str]] = None,
+    course: Optional[Path] = None,
+    pass_fds: Sequence[int] = (),
+) -> Iterator[Started]:
+    """Start ``command`` in ``folder``, in the sandbox unless told, and end it on leaving.
+
+    On leaving the block, everything it started is killed (it is meant to have ended by
+    then: wait for :attr:`Started.process` inside the block) and its control groups removed.
+    ``pass_fds`` are file descriptors the command inherits (the sandbox keeps them open).
+    Other arguments as :func:`run`.
+    """
+    import signal
+    import tempfile
+
+    environment = None
+    if use_sandbox:
+        command = sandboxed_command(command, folder, limits, env=env, course=course)
+    elif env:
+        environment = {**os.environ, **env}
+    with tempfile.TemporaryFile() as given, tempfile.TemporaryFile() as out, (
+        tempfile.TemporaryFile()
+    ) as err:
+        given.write((stdin or "").encode("utf-8"))
+        given.seek(0)
+        groups = student_groups(limits) if use_sandbox else []
+        command = joined(groups, command)
+        process = subprocess.Popen(
+            list(command),
+            stdin=given,
+            stdout=out,
+            stderr=err,
+            cwd=folder,
+            env=environment,
+            start_new_session=True,
+            pass_fds=tuple(pass_fds),
+        )
+        try:
+            yield Started(process, out, err, limits.output_bytes)
+        finally:
+            # What it left behind in its session (without the sandbox), or itself if it runs.
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(process.pid, signal.SIGKILL)
+            process.wait()
+            _remove_when_empty(groups)
+
+
 def run(
     command: Sequence[str],
     folder: Path,
@@ -427,46 +500,14 @@ def run(
         subprocess.TimeoutExpired: if it ran longer than ``timeout`` (it is killed, with
             every process it started).
     """
-    import signal
-    import tempfile
-
-    environment = None
-    if use_sandbox:
-        command = sandboxed_command(command, folder, limits, env=env, course=course)
-    elif env:
-        environment = {**os.environ, **env}
-    with tempfile.TemporaryFile() as given, tempfile.TemporaryFile() as out, (
-        tempfile.TemporaryFile()
-    ) as err:
-        given.write((stdin or "").encode("utf-8"))
-        given.seek(0)
-        groups = student_groups(limits) if use_sandbox else []
-        command = joined(groups, command)
-        process = subprocess.Popen(
-            list(command),
-            stdin=given,
-            stdout=out,
-            stderr=err,
-            cwd=folder,
-            env=environment,
-            start_new_session=True,
-        )
+    with started(command, folder, limits, use_sandbox, stdin, env, course) as running:
+        process = running.process
         try:
             process.wait(timeout=timeout)
-        except BaseException as stopped:  # the time limit, or Ctrl-C: nothing it started stays
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
-            if isinstance(stopped, subprocess.TimeoutExpired):
-                raise subprocess.TimeoutExpired(list(command), timeout) from None
-            raise
-        finally:
-            # What it left behind in its session (without the sandbox).
-            with contextlib.suppress(ProcessLookupError, PermissionError):
-                os.killpg(process.pid, signal.SIGKILL)
-            _remove_when_empty(groups)
-        texts = [_bounded_text(handle, limits.output_bytes) for handle in (out, err)]
-    return subprocess.CompletedProcess(list(command), process.returncode, texts[0], texts[1])
+        except subprocess.TimeoutExpired:
+            raise subprocess.TimeoutExpired(process.args, timeout) from None
+        texts = running.outputs()
+    return subprocess.CompletedProcess(process.args, process.returncode, texts[0], texts[1])
 
 
 def _bounded_text(handle, limit: int) -> str:

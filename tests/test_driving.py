@@ -9,12 +9,11 @@ from __future__ import annotations
 import io
 import os
 import re
-import shutil
 import struct
 import subprocess
 
 import pytest
-from adversarial.cases import NEVER_DRIVES
+from adversarial.cases import FORGES_THE_DRIVE, NEVER_DRIVES
 
 from autograder.course import ROOT
 from autograder.driving import (
@@ -90,24 +89,44 @@ def test_the_reference_drives_every_graded_mission_for_full_marks(reference_driv
     assert [(m["state"], m["passed"]) for m in missions["rotation"].summary["motion"]] == [
         ("clockwise", 1), ("back", 1),
     ]  # fmt: skip
-    assert sorted(path.name for path in box.iterdir()) == sorted([*MISSIONS, "solution.py"])
-    # The runs draw no figure: the grader draws each from its own copy of the bag.
-    assert not list(box.glob("*/trajectory.png"))
+    # The nodes' process writes nothing the grader reads: the robot's side, in the grader,
+    # records the bag, and the grader draws each figure from it.
+    assert sorted(path.name for path in box.iterdir()) == ["solution.py"]
     assert all(driving.figure.startswith(b"\x89PNG") for driving in missions.values())
 
 
-def test_a_figure_left_in_the_run_folder_never_reaches_the_page(reference_drives, tmp_path):
-    # A student's process may write any trajectory.png next to its bag: the page shows the
-    # grader's drawing of the bag it scored.
-    missions, box = reference_drives
-    run = shutil.copytree(box / "rotation", tmp_path / "rotation")
+def test_a_figure_left_in_a_run_folder_never_reaches_the_page(reference_drives, tmp_path):
+    # A run folder of duckie mission may hold any trajectory.png next to its bag: the page
+    # shows the grader's drawing of the bag it scored.
+    missions, _ = reference_drives
+    run_mission(mission="rotation", out=tmp_path / "rotation", animation=False)
     forged = b"\x89PNG\r\n\x1a\n" + b"not the run" * 100
-    (run / "trajectory.png").write_bytes(forged)
-    driving = score_bag(run, "rotation")
+    (tmp_path / "rotation" / "trajectory.png").write_bytes(forged)
+    driving = score_bag(tmp_path / "rotation", "rotation")
     assert driving.score == 100
     assert driving.figure.startswith(b"\x89PNG")
     assert driving.figure != forged
     assert driving.figure == missions["rotation"].figure
+
+
+def test_a_forged_drive_scores_what_the_robot_really_did(sandbox, tmp_path, reference):
+    # The node never drives: it moves the simulator's robot body itself, publishes ideal poses
+    # as the ground truth, and looks for the true pose to steer on. In one process with the
+    # simulator the forgery works (the recorded truth follows the ideal path) ...
+    forged = tmp_path / "forged.py"
+    forged.write_text(reference + "\n\n" + FORGES_THE_DRIVE, encoding="utf-8")
+    run_mission(forged, mission="straight", out=tmp_path / "run", animation=False)
+    fooled = score_bag(tmp_path / "run", "straight")
+    assert fooled.parts["forward"] == fooled.parts["back"] == 30
+    assert "the true pose is offered" in (tmp_path / "run" / "log.txt").read_text()
+    # ... but graded, the nodes run apart from the robot: the robot never moved.
+    driving = drive(forged, tmp_path / "box", Limits(), mission="straight")
+    assert driving.parts == {
+        "bag": 5, "states": 20, "stops": 15, "forward": 0, "back": 0,
+    }  # fmt: skip
+    assert driving.reasons[0] == (
+        "In state forward, the robot did not move; its moves are: straight 1.25 m."
+    )
 
 
 def test_a_node_that_never_ends_loses_the_states_points_with_a_sentence(

@@ -361,6 +361,8 @@ class Graph(ParameterServer):
         self.services: Dict[str, ServiceRecord] = {}
         #: Every connection ever made, also by nodes that have shut down since.
         self.history = ConnectionHistory()
+        #: Called with each publisher or subscriber a node creates, and whether it publishes.
+        self.topic_watchers: List[Callable[[Any, bool], None]] = []
         ParameterServer.__init__(self)
         self.log: List[LogRecord] = []
         self.stdout = stdout
@@ -414,6 +416,20 @@ class Graph(ParameterServer):
         if not duration >= 0:
             raise ValueError(f"Graph.run() needs a duration of 0 s or more, not {duration!r}.")
         self._drive(self._now_ns + round(duration * NS_PER_S), None)
+
+    def run_to(self, t_ns: int) -> None:
+        """Run everything due up to ``t_ns`` (integer nanoseconds) and set the clock there.
+
+        :meth:`run` to an exact time, for a graph that keeps pace with another.
+        """
+        self._drive(max(t_ns, self._now_ns), None)
+
+    def next_event_ns(self) -> Optional[int]:
+        """When the next thing is due, in integer nanoseconds; None when nothing is."""
+        events = self._events
+        while events and events[0][2].cancelled:
+            heapq.heappop(events)
+        return events[0][0] if events else None
 
     def run_until(self, condition: Callable[[], bool], timeout: float) -> bool:
         """Advance the clock until ``condition()`` is true or ``timeout`` seconds have passed.

@@ -25,6 +25,7 @@ if TYPE_CHECKING:
         topics: Dict[str, TopicRecord]
         services: Dict[str, ServiceRecord]
         history: ConnectionHistory
+        topic_watchers: List[Callable[[Any, bool], None]]
 
         @property
         def time(self) -> float: ...

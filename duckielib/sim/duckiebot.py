@@ -169,6 +169,11 @@ class VirtualDuckiebot:
     # Use.
 
     @property
+    def driver_nodes(self) -> Dict[str, Any]:
+        """The robot's own nodes (its drivers), by base name: what a real robot runs."""
+        return dict(self._hosts)
+
+    @property
     def time(self) -> float:
         """The simulated time, in seconds."""
         return self.graph.time

@@ -243,6 +243,7 @@ def _add_handin(commands: argparse._SubParsersAction) -> None:
 
 
 def _mission(args: argparse.Namespace) -> int:
+    from duckielib.tools.apart import run_apart
     from duckielib.tools.runner import run_mission
 
     if args.solution is None:
@@ -250,7 +251,7 @@ def _mission(args: argparse.Namespace) -> int:
 
         reference_solution_dir()  # a sentence where this copy of the course has none
         print("Using the reference solution (the export of solutions/).", flush=True)
-    run = run_mission(
+    run = (run_apart if args.apart else run_mission)(
         solution=args.solution,
         mission=args.mission,
         noise=args.noise,
@@ -338,6 +339,12 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         metavar="SECONDS",
         help="real seconds a node's code may run without calling rospy before the mission "
         "stops it (default 10)",
+    )
+    mission.add_argument(
+        "--apart",
+        action="store_true",
+        help="run your nodes in a process of their own that reaches the robot only through "
+        "topics and services, as the grader does",
     )
     mission.set_defaults(handler=_mission)
 

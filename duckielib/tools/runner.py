@@ -52,7 +52,10 @@ __all__ = [
     "MissionRun",
     "OUTPUTS",
     "RECORDED",
+    "chosen_mission",
     "drive_and_record",
+    "finish_run",
+    "run_files",
     "run_mission",
     "trajectory_figure",
     "write_animation",
@@ -295,22 +298,56 @@ def run_mission(
     """
     from duckielib.ros.modules import modules_installed
 
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ConfigError(f"The simulator's seed must be a whole number 0 or more, not {seed!r}.")
-    chosen = mission_named(mission) if isinstance(mission, str) else mission
-    if stop_color is not None:
-        chosen = chosen.with_stop_color(stop_color)
+    chosen = chosen_mission(mission, seed, stop_color)
     label = "the reference" if solution is None else "your"
     # The nodes import rospy: the in-process graph's, even where a real ROS is installed.
     with modules_installed(replace_real=True):
         parts = _solution(solution)
-    folder = Path(out)
-    _prepare_folder(folder)
-    files = {"bag": folder / "mission.bag", "log": folder / "log.txt"}
+    files = run_files(Path(out))
     with modules_installed(replace_real=True):
         namespace, simulated, wall, failure = drive_and_record(
             parts, chosen, noise, seed, files, time_limit, stall_limit
         )
+    run = (chosen, namespace, noise, seed, label, files, simulated, wall)
+    return finish_run(run, failure, animation, figure)
+
+
+def chosen_mission(
+    mission: Union[str, Mission], seed: int, stop_color: Optional[str] = None
+) -> Mission:
+    """The mission to drive, with its stops' colour; the seed checked.
+
+    Raises:
+        ConfigError: if the mission or colour is unknown, or the seed is not 0 or more.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ConfigError(f"The simulator's seed must be a whole number 0 or more, not {seed!r}.")
+    chosen = mission_named(mission) if isinstance(mission, str) else mission
+    return chosen if stop_color is None else chosen.with_stop_color(stop_color)
+
+
+def run_files(folder: Path) -> Dict[str, Path]:
+    """The run's folder made ready (see :func:`run_mission`), and its bag's and log's paths."""
+    _prepare_folder(folder)
+    return {"bag": folder / "mission.bag", "log": folder / "log.txt"}
+
+
+def finish_run(
+    run: Tuple[Mission, str, str, int, str, Dict[str, Path], float, float],
+    failure: Optional[DuckielibError],
+    animation: bool = True,
+    figure: bool = True,
+) -> MissionRun:
+    """Write a driven run's figure, animation and summary; raise ``failure`` if it stopped.
+
+    Args:
+        run: the mission, namespace, noise, seed, solution's label, files, simulated and
+            wall-clock seconds of the run.
+        failure: why the run stopped early, or None.
+        animation: whether to write ``mission.gif``.
+        figure: whether to draw ``trajectory.png``.
+    """
+    chosen, namespace, noise, seed, label, files, simulated, wall = run
     if failure is None:
         return _write_run(
             chosen, namespace, noise, seed, label, files, simulated, wall, animation, figure=figure

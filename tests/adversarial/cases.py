@@ -35,6 +35,63 @@ def mission_node(mission):
 """
 
 
+#: A mission node that never drives but makes the recorded truth follow the ideal path: it
+#: moves the simulator's robot body itself (found through the garbage collector), publishes
+#: ideal poses as the simulator's ground truth, and would steer on the true pose if it were
+#: offered. In one process with the simulator this once scored full driving marks.
+FORGES_THE_DRIVE = """\
+def mission_node(mission):
+    import gc
+
+    rospy.init_node("mission_node")
+    announce = rospy.Publisher("~state", String, queue_size=10, latch=True)
+    shutdown = rospy.Publisher("shutdown", Empty, queue_size=1)
+    truth = rospy.Publisher("simulator_node/ground_truth_pose", Pose2DStamped, queue_size=10)
+    rospy.wait_for_service("light_service_node/set_color", timeout=10.0)
+    set_color = rospy.ServiceProxy("light_service_node/set_color", ChangePattern)
+    simulators = [item for item in gc.get_objects() if type(item).__name__ == "Simulator"]
+    try:
+        rospy.wait_for_message("simulator_node/ground_truth_pose", Pose2DStamped, timeout=1.0)
+        rospy.loginfo("the true pose is offered")
+    except rospy.ROSException:
+        rospy.loginfo("no true pose offered")
+    x, y, theta = mission.start
+    home = (x, y, theta)
+
+    def place(pose):
+        for simulator in simulators:
+            simulator.robot.body.position = (pose[0], pose[1])
+            simulator.robot.body.angle = pose[2]
+        truth.publish(Pose2DStamped(x=pose[0], y=pose[1], theta=pose[2]))
+
+    for state in mission.states:
+        set_color(String(data=state.color))
+        announce.publish(String(data=state.name))
+        for move in state.moves:
+            if isinstance(move, Stop):
+                rospy.sleep(move.seconds)
+                continue
+            if isinstance(move, Straight):
+                goal = (
+                    x + move.distance * math.cos(theta),
+                    y + move.distance * math.sin(theta),
+                    theta,
+                )
+            elif isinstance(move, Rotate):
+                goal = (x, y, theta + move.angle)
+            else:
+                goal = home
+            for step in range(1, 41):
+                share = step / 40
+                pose = tuple(a + share * (b - a) for a, b in zip((x, y, theta), goal))
+                place(pose)
+                rospy.sleep(0.05)
+            x, y, theta = goal
+    announce.publish(String(data="done"))
+    shutdown.publish(Empty())
+"""
+
+
 @dataclass(frozen=True)
 class Case:
     """One adversarial submission.

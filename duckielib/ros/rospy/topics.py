@@ -189,6 +189,8 @@ class Publisher:
         self._record.publishers.append(self)
         node.publishers.append(self)
         node.graph.history.add_topic_user(node, self._record, publishes=True)
+        for watch in node.graph.topic_watchers:
+            watch(self, True)
         if self.queue_size is None:
             node.log(
                 WARN,
@@ -300,6 +302,8 @@ class Subscriber:
         self._record.subscribers.append(self)
         node.subscribers.append(self)
         node.graph.history.add_topic_user(node, self._record, publishes=False)
+        for watch in node.graph.topic_watchers:
+            watch(self, False)
         for data in self._record.latched.values():
             self._enqueue(data)
         for publisher in list(self._record.publishers):
