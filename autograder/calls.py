@@ -20,7 +20,9 @@ This file is also the kernel's side: the sandbox's server runs its source in eac
 module of its own (:data:`KERNEL_MODULE`), and calls :func:`answer` there. It imports nothing
 of the grader.
 
-A few tests run a robot (a node, a mission) and stay in the kernel (:data:`KERNEL_TESTS`).
+Tests that run the student's nodes on a robot (a node, a mission) run here too: the robot in
+the grader, the nodes in the sandbox, talking through topics and services only
+(:mod:`autograder.robots`).
 """
 
 from __future__ import annotations
@@ -32,9 +34,6 @@ import re
 import sys
 from typing import Any, Callable, Dict, List, Optional
 
-#: The tests that still run in the student's kernel: they run the student's nodes on a robot
-#: simulated in the same process (see the README's grading section).
-KERNEL_TESTS = frozenset({"test_light_service_node", "test_mission_node", "test_mission_closure"})
 #: The environment variables the student's code may read that a test sets (``robot_topic``
 #: reads the robot's name): each call carries their values in the grader's process, and the
 #: kernel sets them (or removes them) before it calls the student's code.

@@ -1,13 +1,14 @@
 """The driving score: a student's own exported code drives the missions on the virtual Duckiebot.
 
 The cells the student tagged ``export`` are collected from their notebooks (read as text, never
-run here), and ``duckie mission`` runs that solution on each mission of :data:`MISSIONS` (square
-then circle, the "D", the straight-line task and the rotation task) inside the same sandbox as
-their notebooks, each run a process of its own. Each mission is scored out of 100 on its own,
-and the driving score is their mean. The grader copies each run's bag into a folder of its
-own and scores what the robot did from that copy, with
-:func:`duckielib.bags.behaviour.mission_report` (states, colours, stops) and
-:func:`autograder.motion.state_motions` (the driving):
+run here), and that solution drives each mission of :data:`MISSIONS` (square then circle, the
+"D", the straight-line task and the rotation task), each a run of its own, scored out of 100
+on its own; the driving score is their mean. In each run the robot and the student's nodes
+run apart (:mod:`duckielib.tools.apart`): the virtual Duckiebot and the bag recorder run here,
+in the grader's process, and the student's nodes in the sandbox, reaching the robot only
+through its topics and services (:mod:`duckielib.sim.link`). The grader scores the bag it
+recorded itself, with :func:`duckielib.bags.behaviour.mission_report` (states, colours, stops)
+and :func:`autograder.motion.state_motions` (the driving):
 
 =================================================  ======
 a readable bag with the mission's states               5
@@ -26,20 +27,16 @@ drives earns none of them. Stopping is in the stops' points (after each move the
 stand still through the next wait), ending is in the states' (the mission node must announce
 "done" and return, as a node that exits properly does).
 
-The run's bag is read through :func:`autograder.files.read_regular` and scored from the
-grader's own copy: no link is followed (the run's folder included), and a bag that is a FIFO, a
-device or bigger than :data:`BAG_LIMIT` is not read; the run then scores zero, with a sentence
-saying why. The feedback page's trajectory figure and animation are drawn by the grader from
-that copy too (the run is started with ``--no-figure``): nothing else the student's process
-wrote reaches the page.
+The feedback page's trajectory figure and animation are drawn from that bag. Nothing the
+student's process wrote is read: the nodes cannot move the robot, read where it really is, or
+write the truth the bag records. (:func:`score_bag` scores a run folder that ``duckie
+mission`` wrote, reading its bag without trusting it: no link followed, no FIFO, device or
+file over :data:`BAG_LIMIT`.)
 
 A run that stops early (a node fails, the mission does not announce its end within the
-simulated time limit, or the wall-clock limit kills it) is scored from the bag it left, with
-the reason first: states it did not finish earn only what they did. A solution that cannot run
-at all scores zero, with the reason the student would see from ``duckie mission``. The student's
-code runs in the simulator's process, so the bag is evidence of behaviour, not a proof against
-forgery: a submission that writes a fake bag is a matter for the instructor, like any other
-cheating.
+simulated time limit, or the wall-clock limit stops it) is scored from the bag recorded until
+then, with the reason first: states it did not finish earn only what they did. A solution that
+cannot run at all scores zero, with the reason the student would see from ``duckie mission``.
 """
 
 from __future__ import annotations
@@ -233,7 +230,7 @@ def drive(
     import contextlib
 
     from duckielib.missions import mission_named
-    from duckielib.tools.apart import OutOfWallTime, drive_apart, nodes_command
+    from duckielib.tools.apart import OutOfWallTime, drive_apart, nodes_arguments, nodes_command
     from duckielib.tools.runner import DEFAULT_TIME_LIMIT_S
 
     chosen = mission_named(mission)
@@ -242,7 +239,8 @@ def drive(
     @contextlib.contextmanager
     def start_nodes(sock: Any) -> Iterator[Any]:
         fd = sock.fileno()
-        command = nodes_command(fd, "solution.py", mission, stall_limit=limits.stall_seconds)
+        arguments = nodes_arguments(mission, stall_limit=limits.stall_seconds)
+        command = nodes_command(fd, "solution.py", arguments)
         env = {"VEHICLE_NAME": ROBOT}
         with started(command, folder, limits, use_sandbox, env=env, pass_fds=(fd,)) as running:
             yield running

@@ -17,11 +17,10 @@ as a new Python: that saves the start of a second interpreter and lets the impor
 reading. ``DUCKIE_KERNEL_ZYGOTE=0`` turns it off; if the zygote cannot start, the kernel is
 launched the usual way.
 
-Tests run in the same kernel as the student's code, so that code could replace what the tests
-rely on (``np.allclose = lambda *a, **k: True``, a fake ``np``, IPython's error display). Before
-the first cell, a guard keeps the originals; before each test cell it puts back whatever was
-replaced, and the grader reports it. This stops the easy ways of making tests pass; code that
-sets out to defeat the guard itself is a matter for the instructor, like any cheating.
+Test cells come here empty and run in the grader (:mod:`autograder.calls`); the kernel only
+answers their calls. Before the first cell, a guard keeps the originals of what tests once
+relied on in the kernel (``np.allclose``, a fake ``np``, IPython's error display); before each
+test cell it puts back whatever the student's code replaced, and the grader reports it.
 """
 
 from __future__ import annotations

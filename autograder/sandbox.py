@@ -424,20 +424,22 @@ def started(
     env: Optional[Dict[str, str]] = None,
     course: Optional[Path] = None,
     pass_fds: Sequence[int] = (),
+    shared: Optional[Tuple[Path, str]] = None,
 ) -> Iterator[Started]:
     """Start ``command`` in ``folder``, in the sandbox unless told, and end it on leaving.
 
     On leaving the block, everything it started is killed (it is meant to have ended by
     then: wait for :attr:`Started.process` inside the block) and its control groups removed.
-    ``pass_fds`` are file descriptors the command inherits (the sandbox keeps them open).
-    Other arguments as :func:`run`.
+    ``pass_fds`` are file descriptors the command inherits (the sandbox keeps them open);
+    ``shared`` a folder shown read-only (see :func:`sandboxed_command`). Other arguments as
+    :func:`run`.
     """
     import signal
     import tempfile
 
     environment = None
     if use_sandbox:
-        command = sandboxed_command(command, folder, limits, env=env, course=course)
+        command = sandboxed_command(command, folder, limits, env=env, course=course, shared=shared)
     elif env:
         environment = {**os.environ, **env}
     with tempfile.TemporaryFile() as given, tempfile.TemporaryFile() as out, (

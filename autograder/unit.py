@@ -175,7 +175,6 @@ def _sandboxed_execute_class(unit: _Unit):
                     executed = None
                     problem = "answered with something that is not the notebook sent"
             if executed is not None:
-                _stderr_is_no_failure(executed, nb)
                 for index, grade_id in tests.items():
                     cell = executed.cells[index]
                     cell.source = nb.cells[index].source
@@ -217,30 +216,15 @@ def _is_test(cell: Any) -> bool:
     return cell.cell_type == "code" and bool(meta.get("grade")) and not meta.get("solution")
 
 
-def _stderr_is_no_failure(executed: Any, sent: Any) -> None:
-    """Show what a test run in the kernel wrote on stderr as ordinary output.
-
-    nbgrader scores a test cell with any stderr output zero: a warning or a log line of the
-    student's correct code would cost the test. Which cells are tests comes from ``sent``.
-    """
-    for index, cell in enumerate(sent.cells):
-        if not _is_test(cell):
-            continue
-        for output in executed.cells[index].get("outputs", []):
-            if output.get("output_type") == "stream" and output.get("name") == "stderr":
-                output["name"] = "stdout"
-
-
 def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     """The notebook to send to the sandbox: each test the grader runs on its side left empty.
 
     Returns:
         The notebook to send, and ``{cell index: grade_id}`` of the tests left empty there
-        (every test cell but :data:`autograder.calls.KERNEL_TESTS`).
+        (every test cell).
     """
     import copy
 
-    from autograder.calls import KERNEL_TESTS
     from autograder.execute import METADATA_KEY
 
     sent = copy.deepcopy(notebook)
@@ -248,7 +232,7 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     for index, cell in enumerate(sent.cells):
         cell.get("metadata", {}).pop(METADATA_KEY, None)  # only the grader marks a cell
         grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
-        if not _is_test(cell) or grade_id in KERNEL_TESTS:
+        if not _is_test(cell):
             continue
         cell.source = ""  # a copy of a test (never left by the repair) is sent empty too
         if grade_id not in tests.values():
@@ -270,6 +254,7 @@ class _TestsHere:
     def test(self, grade_id: str, ask: Any) -> None:
         """Run test ``grade_id`` (one the grader sent empty), asking the kernel through ``ask``."""
         from autograder.calls import Link, prelude, run_test
+        from autograder.robots import robot_names
 
         if grade_id not in self.sources:
             return
@@ -277,6 +262,8 @@ class _TestsHere:
             self.space = prelude(self.cells)
         seconds = self.unit.limits.cell_seconds
         until = time.monotonic() + seconds
+        # A test that runs the student's nodes: the robot here, the nodes in the sandbox.
+        self.space.update(robot_names(self.unit, self.space, until))
 
         def send(request: Dict[str, Any]) -> str:
             return ask(json.dumps(request), until, seconds)

@@ -53,6 +53,9 @@ def test_bench_mission_says_where_the_time_goes_and_leaves_messages_as_they_were
     assert 0 < float(figures["mission_physics_wall_s"]) < wall, "the physics is a part of a run"
     assert float(figures["mission_wall_s_objects_no_bag"]) > 0
     assert int(figures["mission_bag_messages"]) > 9000
+    # Run apart, the clock goes to the nodes and back at each of their steps and each tick.
+    assert 3000 < int(figures["mission_apart_exchanges"]) < int(figures["mission_bag_messages"])
+    assert float(figures["mission_apart_wall_s"]) > wall
     assert float(figures["mission_realtime_factor"]) == pytest.approx(
         float(figures["mission_simulated_s"]) / wall, rel=0.01
     )

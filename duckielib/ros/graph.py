@@ -36,7 +36,7 @@ from typing import Any, Callable, Dict, List, Optional, TextIO, Tuple
 from duckielib.errors import DuckielibError
 from duckielib.ros import context, names
 from duckielib.ros.exceptions import ROSException, ROSInterruptException
-from duckielib.ros.log import ERROR, INFO, LEVEL_NAMES, LogRecord, format_error
+from duckielib.ros.log import ERROR, INFO, LogRecord, format_error
 from duckielib.ros.node import ConnectionHistory, Node, ServiceRecord, TopicRecord
 from duckielib.ros.params import ParameterServer
 from duckielib.rostime import NS_PER_S
@@ -801,10 +801,14 @@ class Graph(ParameterServer):
         """Record a log line of ``node`` and print it (info to stdout, warnings to stderr)."""
         record = LogRecord(self.time, level, node, text)
         self.log.append(record)
-        if not self.echo_logs:
-            return
+        if self.echo_logs:
+            self.print_log(record)
+
+    def print_log(self, record: LogRecord) -> None:
+        """Print a log line: info and debug to stdout, warnings and errors to stderr."""
+        level = record.level
         stream = (self.stdout or sys.stdout) if level <= INFO else (self.stderr or sys.stderr)
-        print(f"[{LEVEL_NAMES[level]}] [{self.time:.3f}] [{node}]: {text}", file=stream)
+        print(repr(record), file=stream)
 
 
 def default_graph() -> Graph:

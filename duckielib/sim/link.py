@@ -188,11 +188,14 @@ def _deliver(record: Any, data: bytes) -> None:
             subscriber._enqueue(data)
 
 
-def _log_records(given: Any) -> List[LogRecord]:
-    """The nodes' log as records: each ``[time, level, node, text]``; anything else dropped."""
+def _log_records(given: Any, size: int = 0) -> List[LogRecord]:
+    """The nodes' log lines as records, each given as ``[time, level, node, text]``.
+
+    Anything else is dropped, and what comes past LOG_LIMIT characters (``size`` taken already).
+    """
     if not isinstance(given, list):
         return []
-    records, size = [], 0
+    records = []
     for item in given:
         if not (isinstance(item, list) and len(item) == 4):
             continue
@@ -207,7 +210,7 @@ def _log_records(given: Any) -> List[LogRecord]:
         size += len(node) + len(text)
         if size > LOG_LIMIT:
             break
-        records.append(LogRecord(float(when), level, node[:NAME_LIMIT], text))
+        records.append(LogRecord(float(when), level, node[:NAME_LIMIT], text[:LOG_LIMIT]))
     return records
 
 
@@ -253,8 +256,10 @@ class RobotLink:
         self.reply_timeout = reply_timeout
         self.deadline = deadline
         self.finished = False
-        #: The nodes' log, handed over when they end (at most LOG_LIMIT characters).
+        #: The nodes' log, as it came (at most LOG_LIMIT characters); each line is in the
+        #: robot's graph's log too, as a master's ``/rosout`` gathers every node's.
         self.nodes_log: List[LogRecord] = []
+        self._logged = 0  # characters of the nodes' log taken
         #: Topics whose messages the nodes published but the robot did not take, and why.
         self.refused: Dict[str, str] = {}
         self._outbox: List[Tuple[str, bytes]] = []
@@ -279,6 +284,12 @@ class RobotLink:
             if not record.name.startswith(truth)
         }
         self._callers: Dict[str, Any] = {}
+        #: The nodes' side's nodes, each stood for by a node of the robot's graph (by name).
+        self._mirrors: Dict[str, Any] = {}
+        self._accepted: Dict[str, Any] = {}  # topic -> the message class taken from the nodes
+        self._wanted: Set[str] = set()  # topics the nodes subscribed to that nobody here offers
+        self._stopped: Optional[NodesStopped] = None  # the nodes stopped during a call
+        self.graph.topic_watchers.append(self._watch)
         self._exchanged_at = -1  # the last time the nodes' side was brought to
         self._taken = 0  # bytes of messages taken from the nodes
 
@@ -330,6 +341,8 @@ class RobotLink:
         graph = self.graph
         t = graph.now_ns
         while True:
+            if self._stopped is not None:
+                raise self._stopped
             graph.run_to(t)
             due = self._nodes_next is not None and self._nodes_next <= t
             if (self._outbox or due) and self._exchange(t):
@@ -393,16 +406,47 @@ class RobotLink:
             raise LinkError("the nodes' side gave a time in the past for its next step")
         self._nodes_next = following
         self.finished = header.get("finished") is True
+        return self._take_answer(header, body) or bool(self._outbox)
+
+    def launch(self, part: str) -> None:
+        """Launch the solution's node ``part`` (``"light_service_node"``) on the nodes' side.
+
+        Raises:
+            NodesStopped: if the nodes' side cannot (the part is missing or unfinished).
+            LinkError: if the nodes' side broke the exchange.
+        """
+        send(self.sock, {"k": "launch", "part": part})
+        header, body = self._await("idle")
+        following = header.get("next")
+        if following is not None and type(following) is not int:
+            raise LinkError("the nodes' side gave no time for its next step")
+        self._nodes_next = following
+        self._take_answer(header, body)
+
+    def _take_answer(self, header: Dict[str, Any], body: bytes) -> bool:
+        """Take in what an answer of the nodes' side carries; whether it brought anything."""
+        self._take_log(header.get("log"))
+        self._take_registrations(header.get("nodes"), header.get("services"))
         busy = self._take_publishers(header.get("pubs", []))
         busy |= self._take_subscriptions(header.get("subs", []))
-        busy |= self._take_messages(header.get("msgs", []), body)
-        return busy or bool(self._outbox)
+        return self._take_messages(header.get("msgs", []), body) or busy
+
+    def _await(self, wanted: str) -> Tuple[Dict[str, Any], bytes]:
+        """The next frame of kind ``wanted``, answering the nodes' service calls meanwhile."""
+        while True:
+            header, body = self._receive()
+            if header["k"] == "call":
+                self._answer_call(header, body)
+            elif header["k"] == wanted:
+                return header, body
+            else:
+                self._unexpected(header, wanted)
 
     def _bye(self, header: Dict[str, Any], body: bytes) -> Optional[NodesStopped]:
         self._take_publishers(header.get("pubs", []))
         self._take_messages(header.get("msgs", []), body)
         self.graph.run_to(self.graph.now_ns)  # the last commands reach the drivers
-        self.nodes_log = _log_records(header.get("log"))
+        self._take_log(header.get("log"))
         crash = header.get("crash")
         if (
             isinstance(crash, list)
@@ -437,34 +481,152 @@ class RobotLink:
             except (DuckielibError, KeyError, ValueError):
                 self.refused[topic] = f"its type {str(type_name)[:80]} is not one of the robot's"
                 continue
-            node = self._host(node_name)
             try:
-                with node_context(node):
-                    self._publishers[topic] = rospy.Publisher(topic, data_class, queue_size=10)
+                self._publish_for(self._host(node_name), topic, data_class)
             except (rospy.ROSException, DuckielibError, TypeError, ValueError) as error:
                 self.refused[topic] = str(error)[:200]
         return False
 
+    def _publish_for(self, node: Any, topic: str, data_class: Any) -> Any:
+        """A publisher here, on ``node``, for what the nodes publish on ``topic``."""
+        with node_context(node):
+            publisher = rospy.Publisher(topic, data_class, queue_size=10)
+        self._publishers[topic] = publisher
+        self._accepted[topic] = data_class
+        return publisher
+
     def _host(self, full_name: str) -> Any:
-        """The robot graph's node standing for the nodes' node ``full_name``."""
+        """The robot graph's node standing for the nodes' node ``full_name`` (or the link's)."""
+        return self._mirror(full_name) or self._node
+
+    def _mirror(self, full_name: str) -> Any:
+        """The node of the robot's graph that stands for the nodes' node ``full_name``.
+
+        None when a node of the robot's own has that name.
+        """
+        mirror = self._mirrors.get(full_name)
+        if mirror is not None and not mirror.is_shutdown:
+            return mirror
         existing = self.graph.nodes.get(full_name)
         if existing is not None and not existing.is_shutdown:
-            driver = existing in self.bot.driver_nodes.values() or existing is self._node
-            return self._node if driver else existing
-        base, namespace = _split_name(full_name)
-        return self.graph.host_node(base, namespace)
+            return None
+        mirror = self._mirrors[full_name] = self.graph.host_node(*_split_name(full_name))
+        return mirror
+
+    def _take_log(self, given: Any) -> None:
+        """Add the nodes' new log lines to the robot's graph's log (and print them if it does)."""
+        records = _log_records(given, self._logged)
+        self._logged += sum(len(record.node) + len(record.text) for record in records)
+        self.nodes_log += records
+        graph = self.graph
+        for record in records:
+            graph.log.append(record)
+            if graph.echo_logs:
+                graph.print_log(record)
+
+    def _take_registrations(self, nodes: Any, services: Any) -> None:
+        """Mirror the nodes' side's nodes and services in the robot's graph.
+
+        As a master lists them: a node that ended there ends here, and its services with it.
+        """
+        from duckielib.messages import get_service_class
+
+        if nodes is not None:
+            if not (
+                isinstance(nodes, list)
+                and len(nodes) <= TOPIC_LIMIT
+                and all(_legal_global(name) for name in nodes)
+            ):
+                raise LinkError("the nodes' side listed its nodes wrongly")
+            for name in nodes:
+                self._mirror(name)
+            for name in [name for name in self._mirrors if name not in nodes]:
+                self._mirrors.pop(name).shutdown("it ended on the nodes' side")
+        if services is None:
+            return
+        if not (
+            isinstance(services, list)
+            and len(services) <= TOPIC_LIMIT
+            and all(
+                isinstance(item, list)
+                and len(item) == 3
+                and _legal_global(item[0])
+                and _legal_global(item[1])
+                and isinstance(item[2], str)
+                for item in services
+            )
+        ):
+            raise LinkError("the nodes' side listed its services wrongly")
+        for node_name, name, type_name in services:
+            mirror = self._mirrors.get(node_name)
+            if mirror is None or mirror.is_shutdown or name in self.graph.services:
+                continue
+            try:
+                service_class = get_service_class(type_name)
+            except (DuckielibError, KeyError, ValueError):
+                continue  # a type of the student's own: the robot's side cannot call it
+            with node_context(mirror):
+                rospy.Service(name, service_class, self._ask_nodes(name, service_class))
+
+    def _ask_nodes(self, name: str, service_class: Any) -> Callable[[Any], Any]:
+        """The handler of a mirrored service: the call goes to the nodes' side and back."""
+        from duckielib.messages.message import MessageError
+
+        def handle(request: Any) -> Any:
+            send(self.sock, {"k": "call", "service": name}, [request.to_bytes()])
+            while True:
+                header, body = self._receive()
+                if header["k"] == "call":
+                    self._answer_call(header, body)
+                    continue
+                if header["k"] == "bye":
+                    self._stopped = self._bye(header, body) or NodesStopped(
+                        "mission", "The nodes stopped during a service call."
+                    )
+                    raise rospy.ServiceException("the node stopped")
+                if header["k"] != "reply":
+                    self._unexpected(header, "reply")
+                break
+            size = header.get("extra", 0)
+            if type(size) is not int or not 0 <= size <= len(body):
+                raise LinkError("the nodes' side sized its answer wrongly")
+            self._take_answer(header, body[size:])
+            if not header.get("ok"):
+                raise rospy.ServiceException(str(header.get("error", ""))[:500])
+            try:
+                return service_class._response_class.from_bytes(body[:size])
+            except (MessageError, ValueError, IndexError, struct.error, UnicodeDecodeError):
+                raise LinkError(f"the nodes answered {name} with what is not a response") from None
+
+        return handle
+
+    def _watch(self, user: Any, publishes: bool) -> None:
+        """A node of the robot's graph made a publisher: send its topic if the nodes want it."""
+        if publishes and user.name in self._wanted and not isinstance(user, _Forward):
+            self._forward(user.name)
 
     def _take_subscriptions(self, topics: Any) -> bool:
         """Send the nodes each robot topic they subscribed to (a latched message at once)."""
         if not isinstance(topics, list) or not all(isinstance(topic, str) for topic in topics):
             raise LinkError("the nodes' side announced its subscriptions wrongly")
         before = len(self._outbox)
+        truth = self.bot.namespace + "simulator_node/"
         for topic in topics:
-            if topic in self._offered and topic not in self._forwarded:
-                self._forwarded.add(topic)
-                with node_context(self._node):
-                    _Forward(topic, self._outbox)
+            if topic in self._forwarded or topic.startswith(truth) or not _legal_global(topic):
+                continue
+            self._wanted.add(topic)
+            record = self.graph.topics.get(topic)
+            mine = set(self._publishers.values())
+            if record is not None and any(pub not in mine for pub in record.publishers):
+                self._forward(topic)
         return len(self._outbox) > before
+
+    def _forward(self, topic: str) -> None:
+        """Send the nodes' side every message published here on ``topic`` from now on."""
+        self._wanted.discard(topic)
+        self._forwarded.add(topic)
+        with node_context(self._node):
+            _Forward(topic, self._outbox)
 
     def _take_messages(self, listed: Any, body: bytes) -> bool:
         """Publish on the robot's graph what the nodes published (each message decoded first)."""
@@ -481,8 +643,10 @@ class RobotLink:
             raise LinkError(f"the nodes published more than {TAKEN_LIMIT // 1024**2} MB")
         for (topic, _), data in zip(listed, pieces):
             publisher = self._publishers.get(topic)
-            if publisher is None or publisher._record is None:
+            if publisher is None:
                 continue  # refused, or never announced: it stays on the nodes' side
+            if publisher._record is None:  # the node that published it ended here
+                publisher = self._publish_for(self._node, topic, self._accepted[topic])
             try:
                 publisher.data_class.from_bytes(data)
             except (MessageError, ValueError, IndexError, struct.error, UnicodeDecodeError):
@@ -545,11 +709,16 @@ class NodesLink:
     Args:
         sock: the connected socket to the robot's side.
         graph: the graph the nodes run on.
+
+    Attributes:
+        launcher: called with a solution part's name when the robot's side asks to launch it
+            (``RobotLink.launch``); None refuses such requests.
     """
 
     def __init__(self, sock: socket.socket, graph: Any) -> None:
         self.sock = sock
         self.graph = graph
+        self.launcher: Optional[Callable[[str], None]] = None
         self._outbox: List[Tuple[str, bytes]] = []
         self._announced: List[List[str]] = []
         self._subscribed: List[str] = []
@@ -557,6 +726,9 @@ class NodesLink:
         self._mine: Set[int] = set()  # the link's own publishers and subscriptions, by id
         self._offered: Dict[str, Any] = {}  # robot topic -> its publisher on this graph
         self._asked: Set[str] = set()
+        self._listed: Tuple[Any, Any] = (None, None)  # the nodes and services last told
+        self._sent_log = 0  # how many of the graph's log lines were sent
+        self._log_size = 0
         header, _ = receive(sock, None)
         if header["k"] != "hello" or header.get("version") != VERSION:
             raise LinkError("the other side is not the virtual Duckiebot's link")
@@ -565,12 +737,13 @@ class NodesLink:
         graph.set_param("/", header.get("params") or {})
         graph.run_to(int(header["t"]))
         self._node = graph.host_node("nodes_link", self.namespace)
-        hosts: Dict[str, Any] = {}
+        self._robot_nodes: Set[str] = {self._node.name}
 
         def host(full: str) -> Any:
-            if full not in hosts:
-                hosts[full] = graph.host_node(*_split_name(full))
-            return hosts[full]
+            if full not in self._robot_nodes:
+                self._robot_nodes.add(full)
+                graph.host_node(*_split_name(full))
+            return graph.nodes[full]
 
         from duckielib.messages import get_message_class, get_service_class
 
@@ -603,16 +776,22 @@ class NodesLink:
                 with node_context(self._node):
                     forward = _Forward(topic, self._outbox)
                 self._mine.add(id(forward))
-        elif topic in self._offered and topic not in self._asked:
+        elif topic not in self._asked:
             self._asked.add(topic)
             self._subscribed.append(topic)
 
     def _remote(self, name: str, service_class: Any) -> Callable[[Any], Any]:
+        """The handler of a robot's service here: the call goes to the robot and back."""
+
         def call(request: Any) -> Any:
             send(self.sock, {"k": "call", "service": name}, [request.to_bytes()])
-            header, body = receive(self.sock, None)
-            if header["k"] != "reply":
-                raise LinkError(f"the robot sent {header['k'][:20]!r} where a reply was due")
+            while True:
+                header, body = receive(self.sock, None)
+                if header["k"] == "reply":
+                    break
+                if header["k"] != "call":
+                    raise LinkError(f"the robot sent {header['k'][:20]!r} where a reply was due")
+                self._answer(header, body)  # the robot's service calls one of ours
             if not header.get("ok"):
                 raise rospy.ServiceException(str(header.get("error", "")))
             return service_class._response_class.from_bytes(body)
@@ -620,7 +799,7 @@ class NodesLink:
         return call
 
     def serve(self, finished: Callable[[], bool]) -> bool:
-        """Follow the robot's clock until it ends the run.
+        """Follow the robot's clock, and answer its calls and launches, until it ends the run.
 
         Returns:
             Whether the robot's side said the mission ended.
@@ -635,34 +814,91 @@ class NodesLink:
             kind = header["k"]
             if kind == "end":
                 return bool(header.get("ended"))
+            if kind == "call":
+                self._answer(header, body)
+                continue
+            if kind == "launch":
+                if self.launcher is None:
+                    raise LinkError("the robot asked to launch a node, which this side cannot")
+                self.launcher(str(header.get("part")))
+                self._send("idle", next=graph.next_event_ns(), finished=bool(finished()))
+                continue
             if kind != "advance":
                 raise LinkError(f"the robot sent {kind[:20]!r} where a step was due")
             t = int(header["t"])
             graph.run_to(t)
             listed = header.get("msgs", [])
             for (topic, _), data in zip(listed, _cut(body, [item[1] for item in listed])):
-                publisher = self._offered[topic]
-                if publisher.latch:
+                publisher = self._offered.get(topic)
+                if publisher is not None and publisher.latch:
                     publisher._record.latched[publisher] = data
-                _deliver(publisher._record, data)
+                record = graph.topics.get(topic)
+                if record is not None:
+                    _deliver(record, data)
             graph.run_to(t)
             self._send("idle", next=graph.next_event_ns(), finished=bool(finished()))
 
-    def bye(self, crash: Optional[Tuple[str, str]], log: List[LogRecord]) -> None:
-        """Hand over the last messages (a shutdown's zero command), the log, and the crash.
+    def _answer(self, header: Dict[str, Any], body: bytes) -> None:
+        """Answer the robot's call of a service one of the nodes offers."""
+        name = header.get("service")
+        record = self.graph.services.get(name) if isinstance(name, str) else None
+        if record is None or not isinstance(name, str) or record.node.name in self._robot_nodes:
+            self._send("reply", ok=False, error=f"service [{name}] unavailable")
+            return
+        try:
+            with node_context(self._node):
+                caller = rospy.ServiceProxy(name, record.service_class)
+            response = caller(record.service_class._request_class.from_bytes(body))
+        except rospy.ServiceException as error:
+            # As the handler said it: the caller's side says it cannot process the request.
+            said, prefix = str(error), "service cannot process request: "
+            said = said[len(prefix) :] if said.startswith(prefix) else said
+            self._send("reply", ok=False, error=said)
+            return
+        self._send("reply", extra=response.to_bytes(), ok=True)
+
+    def bye(self, crash: Optional[Tuple[str, str]]) -> None:
+        """Hand over the last messages (a shutdown's zero command), log lines, and the crash.
 
         ``crash`` is what stopped the nodes, if something did.
         """
-        kept: List[List[Any]] = []
-        size = 0
-        for record in log:
-            size += len(record.text) + len(record.node)
-            if size > LOG_LIMIT:
-                break
-            kept.append([record.time, record.level, record.node, record.text])
-        self._send("bye", crash=list(crash) if crash else None, log=kept)
+        self._send("bye", crash=list(crash) if crash else None)
 
-    def _send(self, kind: str, **fields: Any) -> None:
+    def _new_log(self) -> List[List[Any]]:
+        """The graph's log lines not yet sent, as ``[time, level, node, text]``."""
+        log = self.graph.log
+        kept: List[List[Any]] = []
+        while self._sent_log < len(log) and self._log_size <= LOG_LIMIT:
+            record = log[self._sent_log]
+            self._sent_log += 1
+            self._log_size += len(record.text) + len(record.node)
+            kept.append([record.time, record.level, record.node, record.text])
+        return kept
+
+    def _registrations(self) -> Dict[str, Any]:
+        """The nodes and services of this side, when they changed since last told."""
+        graph = self.graph
+        nodes = sorted(
+            name
+            for name, node in graph.nodes.items()
+            if not node.is_shutdown and name not in self._robot_nodes
+        )
+        services = sorted(
+            [record.node.name, name, record.type]
+            for name, record in graph.services.items()
+            if record.node.name in nodes
+        )
+        if (nodes, services) == self._listed:
+            return {}
+        self._listed = (nodes, services)
+        return {"nodes": nodes, "services": services}
+
+    def _send(self, kind: str, extra: Optional[bytes] = None, **fields: Any) -> None:
+        """Send an answer: ``fields``, then ``extra`` bytes and the messages published.
+
+        It carries what the nodes published and subscribed to since the last answer, and their
+        nodes and services when they changed.
+        """
         outbox = self._outbox[:]  # the link's subscriptions hold this list: emptied in place
         self._outbox.clear()
         announced, self._announced = self._announced, []
@@ -672,6 +908,14 @@ class NodesLink:
             "pubs": announced,
             "subs": subscribed,
             "msgs": [[topic, len(data)] for topic, data in outbox],
+            **self._registrations(),
             **fields,
         }
-        send(self.sock, header, [data for _, data in outbox])
+        log = self._new_log()
+        if log:
+            header["log"] = log
+        blobs = [data for _, data in outbox]
+        if extra is not None:
+            header["extra"] = len(extra)
+            blobs.insert(0, extra)
+        send(self.sock, header, blobs)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import os
 import re
 import socket
@@ -23,7 +24,18 @@ import subprocess
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable, ContextManager, Dict, Iterator, List, Optional, Tuple, Union
+from typing import (
+    Any,
+    Callable,
+    ContextManager,
+    Dict,
+    Iterator,
+    List,
+    Optional,
+    Sequence,
+    Tuple,
+    Union,
+)
 
 from duckielib.errors import ConfigError, DuckielibError
 from duckielib.missions import Mission, mission_named
@@ -43,7 +55,13 @@ from duckielib.tools.runner import (
 __all__ = [
     "OutOfWallTime",
     "drive_apart",
-    "local_nodes",
+    "ApartDuckiebot",
+    "Launcher",
+    "NODE_PARTS",
+    "SavedSolution",
+    "SolutionPart",
+    "local_launcher",
+    "nodes_arguments",
     "main",
     "nodes_command",
     "run_apart",
@@ -59,26 +77,70 @@ class OutOfWallTime(MissionError):
     """The run was stopped at its wall-clock limit (the grader's, for a run apart)."""
 
 
-def nodes_command(
-    fd: int,
-    solution: Optional[str],
-    mission: str,
+#: The solution's parts that are a node's main code without arguments, which the robot's side
+#: may launch on the nodes' side (:meth:`ApartDuckiebot.launch`).
+NODE_PARTS = ("light_service_node",)
+
+#: How a run apart starts the nodes' process: given the nodes' end of the socket and the
+#: process's arguments (:func:`nodes_arguments`), start it (it inherits the socket) and return a
+#: context that ends it when left. :func:`local_launcher` starts it here; the grader starts it
+#: in its sandbox.
+Launcher = Callable[[socket.socket, List[str]], ContextManager[Any]]
+
+
+def nodes_arguments(
+    mission: Optional[str] = None,
     stop_color: Optional[str] = None,
     stall_limit: Optional[float] = None,
-    log: Optional[str] = None,
+    required: Optional[Sequence[str]] = None,
 ) -> List[str]:
+    """The nodes' process's arguments.
+
+    ``mission``: the mission to drive (its three nodes are launched at once), or None (the
+    robot's side launches parts); ``required``: the parts the solution must have.
+    """
+    arguments: List[str] = []
+    if mission is not None:
+        arguments += ["--mission", mission]
+    if stop_color is not None:
+        arguments += ["--stop-color", stop_color]
+    if stall_limit is not None:
+        arguments += ["--stall-limit", repr(float(stall_limit))]
+    if required is not None:
+        arguments += ["--required", ",".join(required)]
+    return arguments
+
+
+def nodes_command(fd: int, solution: Optional[str], arguments: Sequence[str]) -> List[str]:
     """The command line of the nodes' process, given the socket's file descriptor ``fd``."""
     command = [sys.executable, "-m", "duckielib.tools.apart", "--link-fd", str(fd)]
     if solution is not None:
         command += ["--solution", str(solution)]
-    command += ["--mission", mission]
-    if stop_color is not None:
-        command += ["--stop-color", stop_color]
-    if stall_limit is not None:
-        command += ["--stall-limit", repr(float(stall_limit))]
-    if log is not None:
-        command += ["--log", log]
-    return command
+    return command + list(arguments)
+
+
+def local_launcher(solution: Optional[Union[str, os.PathLike]]) -> Launcher:
+    """Start the nodes' process here, with the user's rights (``duckie mission --apart``).
+
+    ``solution``: a folder of notebooks or a ``.py`` file; None: the reference.
+    """
+    given = None if solution is None else os.fspath(solution)
+
+    @contextlib.contextmanager
+    def start(sock: socket.socket, arguments: List[str]) -> Iterator[Any]:
+        fd = sock.fileno()
+        command = nodes_command(fd, given, arguments)
+        process = subprocess.Popen(command, pass_fds=(fd,), stdout=subprocess.DEVNULL)
+        try:
+            yield process
+        finally:
+            try:
+                process.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                process.kill()
+                process.wait()
+
+    return start
 
 
 def run_apart(
@@ -92,51 +154,166 @@ def run_apart(
     time_limit: float = DEFAULT_TIME_LIMIT_S,
     figure: bool = True,
     stall_limit: Optional[float] = None,
+    launcher: Optional[Launcher] = None,
+    wall_limit: Optional[float] = None,
 ) -> Any:
     """:func:`~duckielib.tools.runner.run_mission` with the nodes in a process of their own.
 
     The solution is a folder of notebooks or a ``.py`` file made by ``duckie export`` (None:
-    the reference); the other arguments, what it returns and raises are run_mission's.
+    the reference); ``launcher`` starts the nodes' process (default: here, with that
+    solution); ``wall_limit`` stops a run that takes longer, in wall-clock seconds. The other
+    arguments, what it returns and raises are run_mission's.
     """
     chosen = chosen_mission(mission, seed, stop_color)
-    if solution is not None and not isinstance(solution, (str, os.PathLike)):
-        raise ConfigError("A mission run apart takes its solution as a folder or a .py file.")
+    if launcher is None:
+        if solution is not None and not isinstance(solution, (str, os.PathLike)):
+            raise ConfigError("A mission run apart takes its solution as a folder or a .py file.")
+        launcher = local_launcher(solution)
     label = "the reference" if solution is None else "your"
     files = run_files(Path(out))
-    start = local_nodes(solution, chosen, stop_color, stall_limit)
-    namespace, simulated, wall, failure = drive_apart(start, chosen, noise, seed, files, time_limit)
+    arguments = nodes_arguments(chosen.name, stop_color, stall_limit)
+    start = functools.partial(_with_arguments, launcher, arguments)
+    namespace, simulated, wall, failure = drive_apart(
+        start, chosen, noise, seed, files, time_limit, wall_limit
+    )
     run = (chosen, namespace, noise, seed, label, files, simulated, wall)
     return finish_run(run, failure, animation, figure)
 
 
-def local_nodes(
-    solution: Any,
-    chosen: Mission,
-    stop_color: Optional[str] = None,
-    stall_limit: Optional[float] = None,
-) -> Callable[[socket.socket], ContextManager[Any]]:
-    """How ``duckie mission --apart`` starts the nodes' process: here, with the user's rights.
+class SavedSolution:
+    """A solution that stays on the nodes' side: its node parts can be launched apart.
 
-    Returns:
-        What :func:`drive_apart` takes as ``start_nodes``.
+    What :func:`duckielib.solution.load_solution` stands for where the solution must not be
+    loaded (the grader): ``solution.light_service_node`` names the part, and an
+    :class:`ApartDuckiebot` launches it in the nodes' process.
+
+    Args:
+        required: the parts the solution must have (checked when the nodes' process loads it).
     """
 
-    @contextlib.contextmanager
-    def start(sock: socket.socket) -> Iterator[Any]:
-        fd = sock.fileno()
-        given = None if solution is None else os.fspath(solution)
-        command = nodes_command(fd, given, chosen.name, stop_color, stall_limit)
-        process = subprocess.Popen(command, pass_fds=(fd,), stdout=subprocess.DEVNULL)
-        try:
-            yield process
-        finally:
-            try:
-                process.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                process.kill()
-                process.wait()
+    def __init__(self, required: Sequence[str] = ()) -> None:
+        self.required = tuple(required)
 
-    return start
+    def __getattr__(self, name: str) -> SolutionPart:
+        from duckielib.solution import CONTRACT
+
+        if name.startswith("_") or name not in CONTRACT:
+            raise AttributeError(name)
+        return SolutionPart(self, name)
+
+    def __repr__(self) -> str:
+        return f"<solution on the nodes' side: {', '.join(self.required) or 'no parts named'}>"
+
+
+class SolutionPart:
+    """A part of a :class:`SavedSolution`, by name."""
+
+    def __init__(self, solution: SavedSolution, name: str) -> None:
+        self.solution = solution
+        self.name = name
+        self.__name__ = name
+
+    def __call__(self, *args: Any, **kwargs: Any) -> Any:
+        """Refused: the part runs on the nodes' side only."""
+        raise ConfigError(f"{self.name} runs on the nodes' side: launch it on an ApartDuckiebot.")
+
+    def __repr__(self) -> str:
+        return f"<{self.name} of the solution on the nodes' side>"
+
+
+class ApartDuckiebot:
+    """A virtual Duckiebot whose solution nodes run in a process of their own.
+
+    As :class:`~duckielib.sim.VirtualDuckiebot` (same arguments, attributes and methods),
+    except that launching a :class:`SolutionPart` starts it in the nodes' process, started by
+    ``launcher`` on the first such launch; nodes given as functions run here, on the robot's
+    graph, as on a VirtualDuckiebot. The robot's graph lists the nodes' side's nodes and
+    services as its own, and a service call reaches them; topics cross as in a run apart.
+
+    Args:
+        launcher: starts the nodes' process (:data:`Launcher`).
+        *args: :class:`~duckielib.sim.VirtualDuckiebot`'s.
+        wall_limit: wall-clock seconds the robot may run with the nodes' process.
+        **kwargs: :class:`~duckielib.sim.VirtualDuckiebot`'s.
+    """
+
+    def __init__(
+        self, launcher: Launcher, *args: Any, wall_limit: Optional[float] = None, **kwargs: Any
+    ) -> None:
+        from duckielib.sim import VirtualDuckiebot
+
+        self._bot = VirtualDuckiebot(*args, **kwargs)
+        self._launcher = launcher
+        self._deadline = None if wall_limit is None else time.monotonic() + wall_limit
+        self._link: Any = None
+        self._process: Optional[ContextManager[Any]] = None
+
+    def __getattr__(self, name: str) -> Any:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        return getattr(self._bot, name)
+
+    def launch(self, target: Any, *args: Any, **kwargs: Any) -> None:
+        """Launch ``target``: a :class:`SolutionPart` on the nodes' side, a function here."""
+        if isinstance(target, SolutionPart):
+            self._linked(target.solution.required).launch(target.name)
+        else:
+            self._bot.launch(target, *args, **kwargs)
+
+    def _linked(self, required: Sequence[str]) -> Any:
+        from duckielib.sim.link import RobotLink
+
+        if self._link is None:
+            robot_end, nodes_end = socket.socketpair()
+            arguments = nodes_arguments(required=list(required) or list(NODE_PARTS))
+            self._process = self._launcher(nodes_end, arguments)
+            self._process.__enter__()
+            nodes_end.close()
+            self._link = RobotLink(robot_end, self._bot, REPLY_TIMEOUT_S, self._deadline)
+            self._link.start()
+        return self._link
+
+    def run(self, duration: float) -> None:
+        """Advance the robot and every node, here and apart, by ``duration`` simulated s."""
+        if self._link is None:
+            self._bot.run(duration)
+            return
+        from duckielib.rostime import NS_PER_S
+
+        self._link.advance(self._bot.graph.now_ns + round(duration * NS_PER_S))
+
+    def run_until(self, condition: Callable[[], bool], timeout: float) -> bool:
+        """Advance until ``condition()`` is true (checked every 10 ms) or ``timeout`` s pass."""
+        if self._link is None:
+            return bool(self._bot.run_until(condition, timeout))
+        end = self._bot.time + timeout
+        while not condition():
+            if self._bot.time >= end:
+                return False
+            self.run(min(0.01, end - self._bot.time))
+        return True
+
+    def shutdown(self) -> None:
+        """Stop every node, apart and here, and the nodes' process."""
+        from duckielib.sim.link import LinkError
+
+        try:
+            if self._link is not None:
+                with contextlib.suppress(LinkError):
+                    self._link.end(True)
+                self._link.sock.close()
+        finally:
+            if self._process is not None:
+                process, self._process = self._process, None
+                process.__exit__(None, None, None)
+            self._bot.shutdown()
+
+    def __repr__(self) -> str:
+        return repr(self._bot).replace("VirtualDuckiebot", "ApartDuckiebot", 1)
+
+
+def _with_arguments(launcher: Launcher, arguments: List[str], sock: socket.socket) -> Any:
+    return launcher(sock, arguments)
 
 
 def drive_apart(
@@ -186,8 +363,7 @@ def drive_apart(
         robot_end.close()
         wall = time.perf_counter() - wall
         simulated = bot.time
-        log = sorted(graph.log + link.nodes_log, key=lambda record: record.time)
-        files["log"].write_text("".join(f"{record!r}\n" for record in log), encoding="utf-8")
+        files["log"].write_text("".join(f"{record!r}\n" for record in graph.log), encoding="utf-8")
     if unloaded is not None:
         return bot.namespace, simulated, wall, unloaded
     if crash is None and recorder.error is not None:
@@ -210,11 +386,14 @@ def _follow(
     from duckielib.sim import link as wire
 
     graph = link.graph
+    out_of_time = (OutOfWallTime, f"The mission did not end within {wall_limit} s of wall time.")
     try:
         link.start()
     except wire.NodesStopped as stopped:
         kind, why = _said(stopped)
         return False, (kind, why), kind(why)
+    except wire.OutOfWallTime:  # the solution took all the time to load
+        return False, out_of_time, None
     except wire.LinkError as error:
         return False, (MissionError, f"The nodes' process stopped answering: {error}."), None
     try:
@@ -225,11 +404,7 @@ def _follow(
     except wire.NodesStopped as error:
         return False, _said(error), None
     except wire.OutOfWallTime:
-        return (
-            False,
-            (OutOfWallTime, f"The mission did not end within {wall_limit} s of wall time."),
-            None,
-        )
+        return False, out_of_time, None
     except wire.LinkError as error:
         return False, (MissionError, f"The nodes' process stopped answering: {error}."), None
     return ended, (_said(last) if last is not None and not ended else None), None
@@ -250,11 +425,14 @@ class _Logged:
 
 def serve_nodes(
     parts: Any,
-    chosen: Mission,
+    chosen: Optional[Mission],
     sock: socket.socket,
     stall_limit: Optional[float] = None,
 ) -> Tuple[Optional[Tuple[str, str]], List[Any], bool]:
-    """Run the mission's nodes on a graph of their own, following the robot at ``sock``.
+    """Run nodes on a graph of their own, following the robot at ``sock``.
+
+    With ``chosen``, the mission's three nodes run from the start; the robot's side may also
+    launch any node part of the solution (``light_service_node``) at any time.
 
     Returns:
         What stopped the nodes (``("solution" | "mission", sentence)``), or None when the
@@ -265,7 +443,6 @@ def serve_nodes(
 
     from duckielib.nodes import odometry_node
     from duckielib.ros.graph import STALL_LIMIT_S, Graph, NodeCrashed
-    from duckielib.ros.log import ERROR
     from duckielib.sim.link import LinkError, NodesLink
     from duckielib.solution import SolutionError
 
@@ -280,21 +457,23 @@ def serve_nodes(
             finished.append(True)
 
     namespace = link.namespace
-    graph.launch(odometry_node, rospy, parts, chosen.start, namespace=namespace)
-    graph.launch(_part(parts, "light_service_node"), namespace=namespace)
-    graph.launch(mission_main, name="mission_node", namespace=namespace)
+
+    def launch_part(name: str) -> None:
+        node = getattr(parts, name, None) if name in NODE_PARTS else None
+        if node is None:
+            raise SolutionError(f"The solution has no node {name[:80]!r} to launch.")
+        graph.launch(node, namespace=namespace)
+
+    link.launcher = launch_part
+    if chosen is not None:
+        graph.launch(odometry_node, rospy, parts, chosen.start, namespace=namespace)
+        graph.launch(_part(parts, "light_service_node"), namespace=namespace)
+        graph.launch(mission_main, name="mission_node", namespace=namespace)
     link.ready()
     crash: Optional[Tuple[type, str]] = None
     try:
         ended = link.serve(lambda: bool(finished))
-        errors = [
-            record
-            for record in graph.log
-            if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
-        ]
-        if errors and not ended:
-            said = re.sub(r"^(?:\w+\.)+(?=\w+: )", "", errors[0].text.splitlines()[-1])
-            crash = (MissionError, f"The {errors[0].node} logged an error: {said.rstrip('.')}.")
+        crash = None if ended else _logged_error(graph)
     except NodeCrashed as error:
         node = error.node.rsplit("/", 1)[-1]
         if error.__cause__ is None:  # stopped by the graph itself (code that never waits)
@@ -302,6 +481,8 @@ def serve_nodes(
             crash = (MissionError, f"The {node.replace('_', ' ')} stopped: {said}")
         else:
             crash = _crash_message(node.replace("_", " "), error.__cause__)
+    except SolutionError as error:
+        crash = (SolutionError, str(error))
     except LinkError:
         return None, list(graph.log), False  # the robot has gone: nobody to tell
     graph.shutdown("the run ended")
@@ -310,10 +491,25 @@ def serve_nodes(
     if crash is not None:
         stopped = ("solution" if crash[0] is SolutionError else "mission", crash[1])
     try:
-        link.bye(stopped, log)
+        link.bye(stopped)
     except (LinkError, OSError):
         return stopped, log, False
     return stopped, log, True
+
+
+def _logged_error(graph: Any) -> Optional[Tuple[type, str]]:
+    """The first error a student's node logged, as what stopped the run; None if none did."""
+    from duckielib.ros.log import ERROR
+
+    errors = [
+        record
+        for record in graph.log
+        if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
+    ]
+    if not errors:
+        return None
+    said = re.sub(r"^(?:\w+\.)+(?=\w+: )", "", errors[0].text.splitlines()[-1])
+    return (MissionError, f"The {errors[0].node} logged an error: {said.rstrip('.')}.")
 
 
 def _arguments(argv: Optional[List[str]]) -> argparse.Namespace:
@@ -324,7 +520,8 @@ def _arguments(argv: Optional[List[str]]) -> argparse.Namespace:
     )
     parser.add_argument("--link-fd", type=int, required=True)
     parser.add_argument("--solution")
-    parser.add_argument("--mission", required=True)
+    parser.add_argument("--mission")
+    parser.add_argument("--required", help="the solution's parts it must have, by comma")
     parser.add_argument("--stop-color")
     parser.add_argument("--stall-limit", type=float)
     parser.add_argument("--log")
@@ -335,22 +532,24 @@ def main(argv: Optional[List[str]] = None) -> int:
     """The nodes' process: load the solution, then serve the mission's nodes."""
     from duckielib.ros.modules import modules_installed
     from duckielib.sim.link import LinkError, receive, send
-    from duckielib.solution import SolutionError
-    from duckielib.tools.runner import _solution
+    from duckielib.solution import MISSION_PARTS, SolutionError, load_solution
 
     args = _arguments(argv)
     sock = socket.socket(fileno=args.link_fd)
-    chosen = mission_named(args.mission)
-    if args.stop_color:
+    chosen = None if args.mission is None else mission_named(args.mission)
+    if chosen is not None and args.stop_color:
         chosen = chosen.with_stop_color(args.stop_color)
+    required = MISSION_PARTS if args.required is None else args.required.split(",")
     with modules_installed(replace_real=True):
         try:
-            parts = _solution(args.solution)
-        except (SolutionError, DuckielibError) as error:
-            kind = "solution" if isinstance(error, SolutionError) else "mission"
+            # The saved notebooks, as duckie mission loads them; their visible tests are
+            # graded on their own.
+            parts = load_solution(args.solution, required=required, visible_tests=False)
+        except (SolutionError, DuckielibError, KeyError) as error:
+            kind = "solution" if isinstance(error, (SolutionError, KeyError)) else "mission"
             try:
                 receive(sock, 30.0)  # the robot's hello
-                send(sock, {"k": "bye", "crash": [kind, str(error)], "log": []})
+                send(sock, {"k": "bye", "crash": [kind, str(error)]})
             except (LinkError, OSError):
                 print(f"duckie: {error}", file=sys.stderr)  # nobody else will say it
             return 1

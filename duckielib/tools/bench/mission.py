@@ -7,6 +7,12 @@ plots, which are drawn after the run. The headline is the real-time factor (simu
 per wall-clock second of the run), best of three runs; ``summary.json`` reports the same figure
 for each run.
 
+The same mission run apart, as the grader runs it (the robot here, the nodes in a process of
+their own, one clock over a socket: :mod:`duckielib.tools.apart`), gives two figures:
+``mission_apart_wall_s``, the wall-clock seconds of the run with the nodes' process started
+and ended (best of three), and ``mission_apart_exchanges``, how many times the clock was
+handed to the nodes' side and back.
+
 Two more figures say where the time goes, each from runs of their own:
 
 - ``mission_physics_wall_s``: the part of a run spent in the simulator's physics steps.
@@ -27,9 +33,11 @@ from typing import Any, Callable, Iterator, List, Tuple
 from duckielib.messages.message import Message
 from duckielib.missions import mission_named
 from duckielib.ros.modules import modules_installed
+from duckielib.sim.link import RobotLink
 from duckielib.sim.simulator import Simulator
 from duckielib.solution import MISSION_PARTS, load_solution
 from duckielib.tools import runner
+from duckielib.tools.apart import run_apart
 from duckielib.tools.runner import run_mission
 
 _RUNS = 3
@@ -46,6 +54,14 @@ def run() -> List[Tuple[str, str]]:
             result = run_mission(solution, out=folder, animation=False)
             runs.append((result, Bag(result.files["bag"]).message_count))
     best, messages = min(runs, key=lambda item: item[0].wall_s)
+    apart: List[float] = []
+    exchanges: List[float] = []
+    for _ in range(_RUNS):
+        exchanges.clear()
+        with tempfile.TemporaryDirectory() as folder, _timed(RobotLink, "_exchange", exchanges):
+            start = time.perf_counter()
+            run_apart(out=folder, animation=False, figure=False)
+            apart.append(time.perf_counter() - start)
     physics: List[float] = []
     with _timed(Simulator, "_advance", physics):
         _drive(solution)
@@ -57,6 +73,8 @@ def run() -> List[Tuple[str, str]]:
         ("mission_bag_messages", str(messages)),
         ("mission_physics_wall_s", f"{sum(physics):.3f}"),
         ("mission_wall_s_objects_no_bag", f"{bound:.3f}"),
+        ("mission_apart_wall_s", f"{min(apart):.3f}"),
+        ("mission_apart_exchanges", str(len(exchanges))),
         ("mission_realtime_factor", f"{best.realtime_factor:.0f}"),
     ]
 
