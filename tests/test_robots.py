@@ -78,6 +78,15 @@ def test_the_robot_tests_take_the_graders_robot_and_never_ask_the_kernel_for_it(
     space.update(given)
     assert [name for name in free_names(text) if name not in space] == ["light_service_node"]
     assert not isinstance(given["VirtualDuckiebot"], Remote)
+    # Notebook 09's mission tests likewise: a run_mission the student defines in the kernel
+    # (one that returns a perfect report) is never the test's.
+    cells = [{**cell, "source": source(cell)} for cell in load_solution_nb("09_mission")["cells"]]
+    space = prelude(cells)
+    unit = types.SimpleNamespace(folder=tmp_path, limits=Limits(), use_sandbox=True, export=None)
+    space.update(robot_names(unit, space, time.monotonic() + 60))
+    for grade_id in ("test_mission_node", "test_mission_closure"):
+        text = next(cell["source"] for cell in cells if nbgrader(cell).get("grade_id") == grade_id)
+        assert [name for name in free_names(text) if name not in space] == ["mission_node"]
 
 
 @pytest.mark.parametrize(

@@ -386,28 +386,32 @@ def _follow(
     from duckielib.sim import link as wire
 
     graph = link.graph
-    out_of_time = (OutOfWallTime, f"The mission did not end within {wall_limit} s of wall time.")
     try:
         link.start()
     except wire.NodesStopped as stopped:
         kind, why = _said(stopped)
         return False, (kind, why), kind(why)
-    except wire.OutOfWallTime:  # the solution took all the time to load
-        return False, out_of_time, None
-    except wire.LinkError as error:
-        return False, (MissionError, f"The nodes' process stopped answering: {error}."), None
+    except wire.LinkError as error:  # a hang while the solution loads, too
+        return False, _why_stopped(error, wall_limit), None
     try:
         ended = link.advance(graph.now_ns + round(time_limit * NS_PER_S), until_finished=True)
         after = AFTER_DONE_S if ended else 0.2
         link.advance(graph.now_ns + round(after * NS_PER_S))
         last = link.end(ended)
-    except wire.NodesStopped as error:
-        return False, _said(error), None
-    except wire.OutOfWallTime:
-        return False, out_of_time, None
-    except wire.LinkError as error:
-        return False, (MissionError, f"The nodes' process stopped answering: {error}."), None
+    except (wire.NodesStopped, wire.LinkError) as error:
+        return False, _why_stopped(error, wall_limit), None
     return ended, (_said(last) if last is not None and not ended else None), None
+
+
+def _why_stopped(error: BaseException, wall_limit: Optional[float]) -> Tuple[type, str]:
+    """What stopped a run apart early, as an error class and its sentence."""
+    from duckielib.sim import link as wire
+
+    if isinstance(error, wire.NodesStopped):
+        return _said(error)
+    if isinstance(error, wire.OutOfWallTime):
+        return OutOfWallTime, f"The mission did not end within {wall_limit} s of wall time."
+    return MissionError, f"The nodes' process stopped answering: {error}."
 
 
 def _said(stopped: Any) -> Tuple[type, str]:

@@ -11,8 +11,10 @@ Each student hands in the whole course. What each does, and what an instructor w
   never blocks, the FIFO is left out and said.
 - ``sparse``: a sparse 100 GB file named like a notebook: left out and said; the student
   keeps every point.
-- ``never_drives``: a mission node that announces every state and colour but never moves:
-  the driving points for the moves are lost.
+- ``forges_the_drive``: a mission node that announces every state and colour but never
+  drives: it moves the simulator's robot body itself (found through the garbage collector),
+  publishes ideal poses as the ground truth and looks for the true pose. The robot runs in the
+  grader, apart from the nodes: the driving points for the moves are lost.
 - ``hangs_on_import``: an exported constant whose value takes for ever: the driving run is
   stopped by its wall clock, said in ``problems``; the tests keep their points.
 - ``prints_20mb``: a cell that prints 20 MB: the stored notebook keeps 2 MB, said.
@@ -25,7 +27,7 @@ import shutil
 
 import nbformat
 import pytest
-from cases import NEVER_DRIVES
+from cases import FORGES_THE_DRIVE
 
 from autograder.bench import filled_course
 from autograder.course import ROOT
@@ -65,7 +67,7 @@ def graded(sandbox, tmp_path_factory):
         "reference",
         "fifo",
         "sparse",
-        "never_drives",
+        "forges_the_drive",
         "hangs_on_import",
         "prints_20mb",
     ):
@@ -80,7 +82,7 @@ def graded(sandbox, tmp_path_factory):
     _append(submissions / "fifo", "03_frames", "import os\n\nos.mkfifo('zz_scratch.ipynb')\n")
     with (submissions / "sparse" / "03_frames" / "zz_big.ipynb").open("wb") as handle:
         handle.truncate(100 * 1024**3)
-    _append(submissions / "never_drives", "09_mission", NEVER_DRIVES, export=True)
+    _append(submissions / "forges_the_drive", "09_mission", FORGES_THE_DRIVE, export=True)
     _append(
         submissions / "hangs_on_import",
         "05_odometry",
@@ -142,9 +144,9 @@ def test_a_sparse_file_is_left_out_and_said(graded):
     ]
 
 
-def test_a_robot_that_never_drives_keeps_its_tests_but_loses_the_moves(graded):
+def test_a_forged_drive_keeps_its_tests_but_loses_the_moves(graded):
     results, _ = graded
-    idle = results["never_drives"]
+    idle = results["forges_the_drive"]
     assert _lost(idle) == []
     for driving in idle.missions.values():
         assert driving.score == 40, driving.parts

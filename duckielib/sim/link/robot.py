@@ -1,236 +1,38 @@
-"""The virtual Duckiebot and the nodes that drive it, in two processes joined by one socket.
+"""The robot's side of the link: leads the clock, offers the robot, takes in what the nodes send.
 
-On a real Duckiebot, a student's nodes reach the robot only through topics and services: they
-cannot move the robot's body, read where it really is, or rewrite what the encoders count.
-In one process they could (the simulator is an object away), so for grading, and with
-``duckie mission --apart``, the two sides run apart, each on a graph of its own:
-
-- the **robot's side** (:class:`RobotLink`): the simulator, the robot's driver nodes and the
-  bag recorder, in the process that starts the other;
-- the **nodes' side** (:class:`NodesLink`): the student's nodes, in a process of their own (in
-  the grader's sandbox when grading).
-
-The two graphs keep one simulated clock. The robot's side leads: it runs everything due on
-its graph up to a time ``t``, hands the nodes' side the messages its nodes subscribed to and
-the time ``t``, and waits while that side runs everything due there; the answer carries what
-the nodes published, any new subscriptions, and when the nodes' side next has something to do.
-The clock then moves to whichever side has the earlier next thing. Nothing runs on one side
-while the other works, so the run unfolds as on one graph.
-
-What crosses, and how it is checked on the robot's side:
-
-- The robot's topics and services are offered to the nodes (the nodes' graph shows them as
-  the robot's nodes' own), except the simulator's (``simulator_node/...``): no real robot has
-  them. A topic's messages are sent over only once a node subscribes to it.
-- What the nodes publish reaches the robot's graph as messages of the robot's known types,
-  read by the types' own strict ROS 1 decoders, and is recorded from there. The robot's own
-  outputs (encoder ticks, the executed wheel commands, the LED pattern it shows, the camera)
-  are the robot's alone: the nodes' messages on those topics stay on the nodes' side.
-- A node's service call to the robot is answered by the robot's service, at the same
-  simulated time.
-- Parameters: the nodes' side starts with a copy of the robot's.
-
-Every frame is a length-prefixed JSON header followed by the messages' bytes; sizes are
-bounded on both ends.
+See :mod:`duckielib.sim.link`.
 """
 
 from __future__ import annotations
 
 import json
-import os
 import socket
 import struct
 import time
 from typing import Any, Callable, Dict, List, Optional, Set, Tuple
 
 from duckielib.errors import DuckielibError
-from duckielib.ros import names, rospy
+from duckielib.ros import rospy
 from duckielib.ros.context import node_context
-from duckielib.ros.log import LEVEL_NAMES, LogRecord
-from duckielib.ros.rospy.topics import AnyMsg, Subscriber
+from duckielib.ros.log import LogRecord
+from duckielib.sim.link.wire import (
+    TAKEN_LIMIT,
+    TOPIC_LIMIT,
+    VERSION,
+    LinkError,
+    NodesStopped,
+    OutOfWallTime,
+    _cut,
+    _deliver,
+    _Forward,
+    _legal_global,
+    _log_records,
+    _split_name,
+    receive,
+    send,
+)
 
-__all__ = [
-    "HEADER_LIMIT",
-    "LinkError",
-    "MESSAGE_LIMIT",
-    "NodesLink",
-    "NodesStopped",
-    "OutOfWallTime",
-    "RobotLink",
-]
-
-#: The largest JSON header of a frame, in bytes.
-HEADER_LIMIT = 1024 * 1024
-#: The most bytes of messages one frame may carry (a camera image is about 20 kB).
-MESSAGE_LIMIT = 16 * 1024 * 1024
-#: The most bytes of messages the robot takes from the nodes in one run (the reference's
-#: mission sends about 0.2 MB): a node that floods a topic cannot fill the grader's disk.
-TAKEN_LIMIT = 100 * 1024 * 1024
-#: The most topics the nodes may publish to, and the longest name they may use.
-TOPIC_LIMIT = 200
-NAME_LIMIT = 256
-#: The most characters of the nodes' log lines handed over at the end.
-LOG_LIMIT = 2 * 1024 * 1024
-#: The first word of the exchange, so that each side knows it speaks to the other.
-VERSION = "duckielib-link-1"
-
-_SIZES = struct.Struct("!II")
-
-
-class LinkError(DuckielibError):
-    """The other side broke the exchange: it closed it, was too slow, or sent what is refused."""
-
-
-class OutOfWallTime(LinkError):
-    """The run's wall-clock time was over before the nodes' side answered."""
-
-
-class NodesStopped(DuckielibError):
-    """The nodes' side stopped before the run's end.
-
-    Attributes:
-        kind: ``"solution"`` when a part of the solution is unwritten, ``"mission"`` otherwise.
-        why: the sentence that says what stopped it.
-    """
-
-    def __init__(self, kind: str, why: str) -> None:
-        super().__init__(why)
-        self.kind = kind
-        self.why = why
-
-
-# -- the wire ---------------------------------------------------------------------------------
-
-
-def send(sock: socket.socket, header: Dict[str, Any], blobs: List[bytes] = ()) -> None:  # type: ignore[assignment]
-    """Send one frame: the header as JSON, then the bytes of ``blobs``, one after the other."""
-    head = json.dumps(header, separators=(",", ":")).encode("utf-8")
-    body = b"".join(blobs)
-    try:
-        sock.sendall(_SIZES.pack(len(head), len(body)) + head + body)
-    except OSError as error:
-        raise LinkError(f"the other side closed the link ({error.strerror or error})") from None
-
-
-def _exactly(sock: socket.socket, size: int) -> bytes:
-    chunks = []
-    while size:
-        chunk = sock.recv(min(size, 1 << 20))
-        if not chunk:
-            raise LinkError("the other side closed the link")
-        chunks.append(chunk)
-        size -= len(chunk)
-    return b"".join(chunks)
-
-
-def receive(sock: socket.socket, timeout: Optional[float]) -> Tuple[Dict[str, Any], bytes]:
-    """Receive one frame: its header (a JSON object) and its bytes.
-
-    Raises:
-        LinkError: if the other side closed the link, sent a frame over the limits, a header
-            that is not a JSON object with a string ``k``, or sent nothing for ``timeout`` s.
-    """
-    sock.settimeout(timeout)
-    try:
-        head_size, body_size = _SIZES.unpack(_exactly(sock, _SIZES.size))
-        if head_size > HEADER_LIMIT or body_size > MESSAGE_LIMIT:
-            raise LinkError(f"a frame of {head_size + body_size} bytes is over the limit")
-        head = _exactly(sock, head_size)
-        body = _exactly(sock, body_size)
-    except socket.timeout:
-        raise LinkError(f"the other side sent nothing for {timeout:.0f} s") from None
-    except OSError as error:
-        raise LinkError(f"the link broke ({error.strerror or error})") from None
-    try:
-        header = json.loads(head.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
-        raise LinkError("a frame's header is not JSON") from None
-    if not isinstance(header, dict) or not isinstance(header.get("k"), str):
-        raise LinkError("a frame's header is not an object with a kind")
-    return header, body
-
-
-def _cut(body: bytes, sizes: List[int]) -> List[bytes]:
-    """``body`` cut into pieces of ``sizes`` bytes, which must add up to all of it."""
-    if any(type(size) is not int or size < 0 for size in sizes) or sum(sizes) != len(body):
-        raise LinkError("a frame's message sizes do not match its bytes")
-    pieces, start = [], 0
-    for size in sizes:
-        pieces.append(body[start : start + size])
-        start += size
-    return pieces
-
-
-class _Forward(Subscriber):
-    """A subscription of the link: takes each message's bytes as published, for the other side.
-
-    Like the bag recorder's subscription, it relies on the private
-    ``Subscriber._enqueue(data)``, which rospy calls with each message's serialized bytes.
-    """
-
-    def __init__(self, topic: str, outbox: List[Tuple[str, bytes]]) -> None:
-        self._outbox = outbox
-        self._topic = topic
-        super().__init__(topic, AnyMsg, queue_size=None)
-
-    def _enqueue(self, data: bytes) -> None:  # overrides rospy's private method: see above
-        self._outbox.append((self._topic, data))
-
-
-def _deliver(record: Any, data: bytes) -> None:
-    """Hand ``data`` to the topic's subscribers as ``publish()`` does, except the link's own.
-
-    A message from the other side is never sent back to it.
-    """
-    record.message_count += 1
-    for subscriber in list(record.subscribers):
-        if not isinstance(subscriber, _Forward):
-            subscriber._enqueue(data)
-
-
-def _log_records(given: Any, size: int = 0) -> List[LogRecord]:
-    """The nodes' log lines as records, each given as ``[time, level, node, text]``.
-
-    Anything else is dropped, and what comes past LOG_LIMIT characters (``size`` taken already).
-    """
-    if not isinstance(given, list):
-        return []
-    records = []
-    for item in given:
-        if not (isinstance(item, list) and len(item) == 4):
-            continue
-        when, level, node, text = item
-        if not (
-            type(when) in (int, float)
-            and level in LEVEL_NAMES
-            and isinstance(node, str)
-            and isinstance(text, str)
-        ):
-            continue
-        size += len(node) + len(text)
-        if size > LOG_LIMIT:
-            break
-        records.append(LogRecord(float(when), level, node[:NAME_LIMIT], text[:LOG_LIMIT]))
-    return records
-
-
-def _split_name(full: str) -> Tuple[str, str]:
-    """A node's global name as (base name, namespace)."""
-    namespace, _, base = full.rpartition("/")
-    return base, namespace + "/"
-
-
-def _legal_global(name: Any) -> bool:
-    return (
-        isinstance(name, str)
-        and 1 < len(name) <= NAME_LIMIT
-        and name.startswith("/")
-        and names.is_legal_name(name)
-        and name == names.canonical(name)
-    )
-
-
-# -- the robot's side -------------------------------------------------------------------------
+__all__ = ["RobotLink"]
 
 
 class RobotLink:
@@ -290,6 +92,7 @@ class RobotLink:
         self._wanted: Set[str] = set()  # topics the nodes subscribed to that nobody here offers
         self._stopped: Optional[NodesStopped] = None  # the nodes stopped during a call
         self.graph.topic_watchers.append(self._watch)
+        self._publishing = False  # while the link makes a publisher of its own
         self._exchanged_at = -1  # the last time the nodes' side was brought to
         self._taken = 0  # bytes of messages taken from the nodes
 
@@ -489,8 +292,12 @@ class RobotLink:
 
     def _publish_for(self, node: Any, topic: str, data_class: Any) -> Any:
         """A publisher here, on ``node``, for what the nodes publish on ``topic``."""
-        with node_context(node):
-            publisher = rospy.Publisher(topic, data_class, queue_size=10)
+        self._publishing = True  # not a publisher of the robot's own: see _watch
+        try:
+            with node_context(node):
+                publisher = rospy.Publisher(topic, data_class, queue_size=10)
+        finally:
+            self._publishing = False
         self._publishers[topic] = publisher
         self._accepted[topic] = data_class
         return publisher
@@ -602,7 +409,7 @@ class RobotLink:
 
     def _watch(self, user: Any, publishes: bool) -> None:
         """A node of the robot's graph made a publisher: send its topic if the nodes want it."""
-        if publishes and user.name in self._wanted and not isinstance(user, _Forward):
+        if publishes and user.name in self._wanted and not self._publishing:
             self._forward(user.name)
 
     def _take_subscriptions(self, topics: Any) -> bool:
@@ -701,221 +508,3 @@ class RobotLink:
 
 
 # -- the nodes' side --------------------------------------------------------------------------
-
-
-class NodesLink:
-    """The nodes' side: a graph of their own that follows the robot's clock.
-
-    Args:
-        sock: the connected socket to the robot's side.
-        graph: the graph the nodes run on.
-
-    Attributes:
-        launcher: called with a solution part's name when the robot's side asks to launch it
-            (``RobotLink.launch``); None refuses such requests.
-    """
-
-    def __init__(self, sock: socket.socket, graph: Any) -> None:
-        self.sock = sock
-        self.graph = graph
-        self.launcher: Optional[Callable[[str], None]] = None
-        self._outbox: List[Tuple[str, bytes]] = []
-        self._announced: List[List[str]] = []
-        self._subscribed: List[str] = []
-        self._published: Set[str] = set()
-        self._mine: Set[int] = set()  # the link's own publishers and subscriptions, by id
-        self._offered: Dict[str, Any] = {}  # robot topic -> its publisher on this graph
-        self._asked: Set[str] = set()
-        self._listed: Tuple[Any, Any] = (None, None)  # the nodes and services last told
-        self._sent_log = 0  # how many of the graph's log lines were sent
-        self._log_size = 0
-        header, _ = receive(sock, None)
-        if header["k"] != "hello" or header.get("version") != VERSION:
-            raise LinkError("the other side is not the virtual Duckiebot's link")
-        self.namespace: str = header["namespace"]
-        os.environ["VEHICLE_NAME"] = self.namespace.strip("/")
-        graph.set_param("/", header.get("params") or {})
-        graph.run_to(int(header["t"]))
-        self._node = graph.host_node("nodes_link", self.namespace)
-        self._robot_nodes: Set[str] = {self._node.name}
-
-        def host(full: str) -> Any:
-            if full not in self._robot_nodes:
-                self._robot_nodes.add(full)
-                graph.host_node(*_split_name(full))
-            return graph.nodes[full]
-
-        from duckielib.messages import get_message_class, get_service_class
-
-        for node_name, topic, type_name, latch in header.get("topics", []):
-            with node_context(host(node_name)):
-                publisher = rospy.Publisher(
-                    topic, get_message_class(type_name), latch=latch, queue_size=1
-                )
-            self._mine.add(id(publisher))
-            self._offered[topic] = publisher
-        for node_name, name, type_name in header.get("services", []):
-            service_class = get_service_class(type_name)
-            with node_context(host(node_name)):
-                rospy.Service(name, service_class, self._remote(name, service_class))
-        graph.topic_watchers.append(self._watch)
-
-    def ready(self) -> None:
-        """Say the nodes are launched: the run may start."""
-        send(self.sock, {"k": "ready"})
-
-    def _watch(self, user: Any, publishes: bool) -> None:
-        """A node made a publisher or a subscriber: take what the other side needs of it."""
-        if id(user) in self._mine or isinstance(user, _Forward):
-            return
-        topic = user.name
-        if publishes:
-            if topic not in self._published:
-                self._published.add(topic)
-                self._announced.append([user.node.name, topic, user.type])
-                with node_context(self._node):
-                    forward = _Forward(topic, self._outbox)
-                self._mine.add(id(forward))
-        elif topic not in self._asked:
-            self._asked.add(topic)
-            self._subscribed.append(topic)
-
-    def _remote(self, name: str, service_class: Any) -> Callable[[Any], Any]:
-        """The handler of a robot's service here: the call goes to the robot and back."""
-
-        def call(request: Any) -> Any:
-            send(self.sock, {"k": "call", "service": name}, [request.to_bytes()])
-            while True:
-                header, body = receive(self.sock, None)
-                if header["k"] == "reply":
-                    break
-                if header["k"] != "call":
-                    raise LinkError(f"the robot sent {header['k'][:20]!r} where a reply was due")
-                self._answer(header, body)  # the robot's service calls one of ours
-            if not header.get("ok"):
-                raise rospy.ServiceException(str(header.get("error", "")))
-            return service_class._response_class.from_bytes(body)
-
-        return call
-
-    def serve(self, finished: Callable[[], bool]) -> bool:
-        """Follow the robot's clock, and answer its calls and launches, until it ends the run.
-
-        Returns:
-            Whether the robot's side said the mission ended.
-
-        Raises:
-            NodeCrashed: if a node's code failed or stalled (the run stops).
-            LinkError: if the robot's side broke the exchange.
-        """
-        graph = self.graph
-        while True:
-            header, body = receive(self.sock, None)
-            kind = header["k"]
-            if kind == "end":
-                return bool(header.get("ended"))
-            if kind == "call":
-                self._answer(header, body)
-                continue
-            if kind == "launch":
-                if self.launcher is None:
-                    raise LinkError("the robot asked to launch a node, which this side cannot")
-                self.launcher(str(header.get("part")))
-                self._send("idle", next=graph.next_event_ns(), finished=bool(finished()))
-                continue
-            if kind != "advance":
-                raise LinkError(f"the robot sent {kind[:20]!r} where a step was due")
-            t = int(header["t"])
-            graph.run_to(t)
-            listed = header.get("msgs", [])
-            for (topic, _), data in zip(listed, _cut(body, [item[1] for item in listed])):
-                publisher = self._offered.get(topic)
-                if publisher is not None and publisher.latch:
-                    publisher._record.latched[publisher] = data
-                record = graph.topics.get(topic)
-                if record is not None:
-                    _deliver(record, data)
-            graph.run_to(t)
-            self._send("idle", next=graph.next_event_ns(), finished=bool(finished()))
-
-    def _answer(self, header: Dict[str, Any], body: bytes) -> None:
-        """Answer the robot's call of a service one of the nodes offers."""
-        name = header.get("service")
-        record = self.graph.services.get(name) if isinstance(name, str) else None
-        if record is None or not isinstance(name, str) or record.node.name in self._robot_nodes:
-            self._send("reply", ok=False, error=f"service [{name}] unavailable")
-            return
-        try:
-            with node_context(self._node):
-                caller = rospy.ServiceProxy(name, record.service_class)
-            response = caller(record.service_class._request_class.from_bytes(body))
-        except rospy.ServiceException as error:
-            # As the handler said it: the caller's side says it cannot process the request.
-            said, prefix = str(error), "service cannot process request: "
-            said = said[len(prefix) :] if said.startswith(prefix) else said
-            self._send("reply", ok=False, error=said)
-            return
-        self._send("reply", extra=response.to_bytes(), ok=True)
-
-    def bye(self, crash: Optional[Tuple[str, str]]) -> None:
-        """Hand over the last messages (a shutdown's zero command), log lines, and the crash.
-
-        ``crash`` is what stopped the nodes, if something did.
-        """
-        self._send("bye", crash=list(crash) if crash else None)
-
-    def _new_log(self) -> List[List[Any]]:
-        """The graph's log lines not yet sent, as ``[time, level, node, text]``."""
-        log = self.graph.log
-        kept: List[List[Any]] = []
-        while self._sent_log < len(log) and self._log_size <= LOG_LIMIT:
-            record = log[self._sent_log]
-            self._sent_log += 1
-            self._log_size += len(record.text) + len(record.node)
-            kept.append([record.time, record.level, record.node, record.text])
-        return kept
-
-    def _registrations(self) -> Dict[str, Any]:
-        """The nodes and services of this side, when they changed since last told."""
-        graph = self.graph
-        nodes = sorted(
-            name
-            for name, node in graph.nodes.items()
-            if not node.is_shutdown and name not in self._robot_nodes
-        )
-        services = sorted(
-            [record.node.name, name, record.type]
-            for name, record in graph.services.items()
-            if record.node.name in nodes
-        )
-        if (nodes, services) == self._listed:
-            return {}
-        self._listed = (nodes, services)
-        return {"nodes": nodes, "services": services}
-
-    def _send(self, kind: str, extra: Optional[bytes] = None, **fields: Any) -> None:
-        """Send an answer: ``fields``, then ``extra`` bytes and the messages published.
-
-        It carries what the nodes published and subscribed to since the last answer, and their
-        nodes and services when they changed.
-        """
-        outbox = self._outbox[:]  # the link's subscriptions hold this list: emptied in place
-        self._outbox.clear()
-        announced, self._announced = self._announced, []
-        subscribed, self._subscribed = self._subscribed, []
-        header = {
-            "k": kind,
-            "pubs": announced,
-            "subs": subscribed,
-            "msgs": [[topic, len(data)] for topic, data in outbox],
-            **self._registrations(),
-            **fields,
-        }
-        log = self._new_log()
-        if log:
-            header["log"] = log
-        blobs = [data for _, data in outbox]
-        if extra is not None:
-            header["extra"] = len(extra)
-            blobs.insert(0, extra)
-        send(self.sock, header, blobs)
