@@ -66,6 +66,26 @@ def sandbox_launcher(unit: Any) -> Any:
     return start
 
 
+def _keep_for_driving(unit: Any, run: Any, options: Dict[str, Any]) -> None:
+    """Keep a finished run that the driving score would drive again.
+
+    The same mission on the ideal robot, seed 0, the mission's own colours and time limit
+    (see :func:`autograder.driving.drive_missions`).
+    """
+    mission = options.get("mission", "square_then_circle")
+    same = (
+        isinstance(mission, str)
+        and options.get("noise", "ideal") == "ideal"
+        and options.get("seed", 0) == 0
+        and options.get("stop_color") is None
+        and "time_limit" not in options
+        and "stall_limit" not in options
+    )
+    runs = getattr(unit, "runs", None)
+    if same and runs is not None and run.report.finished:
+        runs.setdefault(mission, run.files["bag"])
+
+
 def robot_names(unit: Any, space: Dict[str, Any], until: float) -> Dict[str, Any]:
     """The grader's meaning of the names of ``space`` that run a student's nodes.
 
@@ -74,31 +94,36 @@ def robot_names(unit: Any, space: Dict[str, Any], until: float) -> Dict[str, Any
         space: the notebook's namespace for its tests (only the names it imports are given).
         until: the ``time.monotonic()`` by which the test must end.
     """
-    from duckielib.errors import DuckielibError
-    from duckielib.tools import apart
-
     launcher = sandbox_launcher(unit)
 
     def left() -> float:
         return max(1.0, until - time.monotonic())
 
     def load_solution(path: Any = None, required: Any = (), visible_tests: Any = None) -> Any:
-        return apart.SavedSolution(list(required))
+        from duckielib.tools.apart import SavedSolution
+
+        return SavedSolution(list(required))
 
     def check_saved(solution: Any, *defined_here: Any) -> None:
         return None  # the notebooks graded are the saved ones
 
     def run_mission(solution: Any = None, **options: Any) -> Any:
+        from duckielib.errors import DuckielibError
+        from duckielib.tools.apart import run_apart
+
         options.setdefault("out", tempfile.mkdtemp(prefix="mission-", dir=unit.folder))
         try:
-            return apart.run_apart(solution, launcher=launcher, wall_limit=left(), **options)
+            run = run_apart(solution, launcher=launcher, wall_limit=left(), **options)
         except DuckielibError as error:  # the grader's folders mean nothing to the student
             said = re.sub(r"\s*The run's [^.]*? (?:is|are) in \S+?\.?$", "", str(error))
             raise type(error)(said) from None
+        _keep_for_driving(unit, run, options)
+        return run
 
-    class VirtualDuckiebot(apart.ApartDuckiebot):
-        def __init__(self, *args: Any, **kwargs: Any) -> None:
-            super().__init__(launcher, *args, wall_limit=left(), **kwargs)
+    def VirtualDuckiebot(*args: Any, **kwargs: Any) -> Any:  # noqa: N802 - the test's name
+        from duckielib.tools.apart import ApartDuckiebot
+
+        return ApartDuckiebot(launcher, *args, wall_limit=left(), **kwargs)
 
     given = {
         "load_solution": load_solution,

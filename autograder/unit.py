@@ -540,6 +540,8 @@ class _Unit:
     folder: Path
     task: Dict[str, Any]
     problems: List[str] = dataclasses.field(default_factory=list)
+    #: Runs the tests drove that the driving score would drive again, by mission (the bags).
+    runs: Dict[str, Path] = dataclasses.field(default_factory=dict)
     timings: Dict[str, float] = dataclasses.field(
         default_factory=lambda: dict.fromkeys(("notebooks", "cells", "nbgrader", "driving"), 0.0)
     )
@@ -646,7 +648,11 @@ class _Unit:
             before = time.monotonic()
             if handed_in:
                 missions = drive_missions(
-                    self.export, self.folder / "driving", self.limits, self.use_sandbox
+                    self.export,
+                    self.folder / "driving",
+                    self.limits,
+                    self.use_sandbox,
+                    runs=self.runs,
                 )
                 for name, driving in missions.items():
                     # The grader's folders mean nothing to the student.

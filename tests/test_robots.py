@@ -64,12 +64,17 @@ def graded_test(tmp_path, name, grade_id, replacements=None):
     return run_test(text, grade_id, space, NoKernel()), given, text
 
 
-def test_the_robot_tests_take_the_graders_robot_and_never_ask_the_kernel_for_it(sandbox, tmp_path):
+def test_the_robot_tests_take_the_graders_robot_and_never_ask_the_kernel_for_it(
+    sandbox, tmp_path, monkeypatch
+):
+    monkeypatch.setenv("VEHICLE_NAME", "duckiebot")  # a robot sets it: put back afterwards
     outputs, given, text = graded_test(tmp_path, "08_leds", "test_light_service_node")
     assert outputs == []
     # The names notebook 08 imports (it runs no mission: run_mission is not among them).
     assert set(given) == {"load_solution", "check_saved", "VirtualDuckiebot"}
-    assert issubclass(given["VirtualDuckiebot"], ApartDuckiebot)
+    robot = given["VirtualDuckiebot"](name="grader_check")
+    assert isinstance(robot, ApartDuckiebot)
+    robot.shutdown()
     # Of the test's names, only the student's own node is the kernel's (check_saved's
     # argument, never called): the robot, the runner and the loader are the grader's.
     space = prelude(

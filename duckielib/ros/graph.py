@@ -363,6 +363,8 @@ class Graph(ParameterServer):
         self.history = ConnectionHistory()
         #: Called with each publisher or subscriber a node creates, and whether it publishes.
         self.topic_watchers: List[Callable[[Any, bool], None]] = []
+        #: How many nodes have shut down (a change of the graph's nodes, cheap to watch).
+        self.nodes_shut_down = 0
         ParameterServer.__init__(self)
         self.log: List[LogRecord] = []
         self.stdout = stdout
@@ -648,6 +650,7 @@ class Graph(ParameterServer):
     def node_shut_down(self) -> None:
         """Note that a node shut down: sleeping and spinning nodes check whether it was theirs."""
         self._shutdowns = True
+        self.nodes_shut_down += 1
 
     def block(
         self, deadline_ns: Optional[int], predicate: Callable[[], bool], polled: bool = True

@@ -34,9 +34,8 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Tuple, Union
 
-from duckielib.bags.behaviour import AFTER_DONE_S, DONE, MissionReport, mission_report
 from duckielib.errors import ConfigError, DuckielibError
 from duckielib.missions import Mission, mission_named
 from duckielib.solution import (
@@ -46,6 +45,9 @@ from duckielib.solution import (
     check_part,
     load_solution,
 )
+
+if TYPE_CHECKING:  # the bag's analysis is imported where a run is read, not by the nodes
+    from duckielib.bags.behaviour import MissionReport
 
 __all__ = [
     "MissionError",
@@ -381,6 +383,8 @@ def _write_run(
 
     folder = files["bag"].parent
     tracks = pose_tracks(files["bag"], "record")
+    from duckielib.bags.behaviour import mission_report
+
     report = mission_report(files["bag"], chosen, namespace, tracks=tracks)
     summary: Dict[str, Any] = report.as_dict()
     summary.update(
@@ -426,6 +430,7 @@ def drive_and_record(
     import rospy  # the in-process graph's, served by install_modules
 
     from duckielib.bags import BagRecorder
+    from duckielib.bags.behaviour import AFTER_DONE_S
     from duckielib.nodes import odometry_node
     from duckielib.ros.graph import STALL_LIMIT_S, Graph, NodeCrashed
     from duckielib.ros.log import ERROR
@@ -500,6 +505,8 @@ def _failure(
     graph: Any,
 ) -> Optional[DuckielibError]:
     """Why the run stopped early, as the error to raise; None when it ended."""
+    from duckielib.bags.behaviour import DONE
+
     failure: Optional[DuckielibError] = None
     if crash is not None:
         kind, said = crash
@@ -524,6 +531,7 @@ def _failure(
 def _announced_done(bag: Path, namespace: str) -> bool:
     """Whether the mission node's last state in the run's bag is ``done``."""
     from duckielib.bags import Bag
+    from duckielib.bags.behaviour import DONE
 
     try:
         names = [item.message.data for item in Bag(bag).read(namespace + "mission_node/state")]

@@ -50,6 +50,7 @@ class NodesLink:
         self._offered: Dict[str, Any] = {}  # robot topic -> its publisher on this graph
         self._asked: Set[str] = set()
         self._listed: Tuple[Any, Any] = (None, None)  # the nodes and services last told
+        self._seen: Tuple[int, int, int] = (-1, -1, -1)  # the graph's counts when last looked
         self._sent_log = 0  # how many of the graph's log lines were sent
         self._log_size = 0
         header, _ = receive(sock, None)
@@ -149,8 +150,9 @@ class NodesLink:
             if kind != "advance":
                 raise LinkError(f"the robot sent {kind[:20]!r} where a step was due")
             t = int(header["t"])
-            graph.run_to(t)
             listed = header.get("msgs", [])
+            if listed:  # what is due before the messages' arrival runs first
+                graph.run_to(t)
             for (topic, _), data in zip(listed, _cut(body, [item[1] for item in listed])):
                 publisher = self._offered.get(topic)
                 if publisher is not None and publisher.latch:
@@ -201,6 +203,11 @@ class NodesLink:
     def _registrations(self) -> Dict[str, Any]:
         """The nodes and services of this side, when they changed since last told."""
         graph = self.graph
+        # Nodes come, end, or offer services rarely: look again only when their counts moved.
+        seen = (len(graph.nodes), graph.nodes_shut_down, len(graph.services))
+        if seen == self._seen:
+            return {}
+        self._seen = seen
         nodes = sorted(
             name
             for name, node in graph.nodes.items()

@@ -34,6 +34,9 @@ from duckielib.sim.link.wire import (
 
 __all__ = ["RobotLink"]
 
+#: The fields of an answer that says nothing new when they are empty.
+_QUIET = frozenset({"k", "next", "finished", "pubs", "subs", "msgs"})
+
 
 class RobotLink:
     """The robot's side: leads the clock, offers the robot, takes in what the nodes publish.
@@ -228,6 +231,9 @@ class RobotLink:
 
     def _take_answer(self, header: Dict[str, Any], body: bytes) -> bool:
         """Take in what an answer of the nodes' side carries; whether it brought anything."""
+        busy = body or header.get("pubs") or header.get("subs") or header.get("msgs")
+        if not (busy or header.keys() - _QUIET):
+            return False  # the most common answer: nothing new
         self._take_log(header.get("log"))
         self._take_registrations(header.get("nodes"), header.get("services"))
         busy = self._take_publishers(header.get("pubs", []))
