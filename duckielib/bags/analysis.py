@@ -46,6 +46,8 @@ __all__ = [
     "pose_tracks",
     "read_encoders",
     "read_topic",
+    "encoder_resolution",
+    "odometry_of_streams",
     "replay_odometry",
 ]
 
@@ -507,7 +509,7 @@ def pose_tracks(bag: Union[Bag, PathLike], time_base: str = "auto") -> List[Pose
     return tracks
 
 
-def _one_resolution(bag: Bag, left: EncoderStream, right: EncoderStream) -> int:
+def encoder_resolution(bag: Bag, left: EncoderStream, right: EncoderStream) -> int:
     """The encoders' resolution (ticks per wheel revolution), the same in every message.
 
     Raises:
@@ -576,7 +578,25 @@ def replay_odometry(
     for stream in (left, right):
         if not len(stream.t):
             raise BagError(f"{stream.topic} has no message, so no odometry can be computed.")
-    resolution = _one_resolution(bag, left, right)
+    resolution = encoder_resolution(bag, left, right)
+    return odometry_of_streams(left, right, solution, resolution, start, radius, baseline, label)
+
+
+def odometry_of_streams(
+    left: EncoderStream,
+    right: EncoderStream,
+    solution: Any,
+    resolution: int,
+    start: Sequence[float] = TASK_START,
+    radius: float = DB21.radius,
+    baseline: float = DB21.baseline,
+    label: str = "odometry",
+) -> PoseTrack:
+    """Dead reckoning from two wheels' readings, with a solution's odometry.
+
+    :func:`replay_odometry` for readings already read (or simulated): ``resolution`` ticks per
+    revolution; the other arguments as there.
+    """
     odometry = Odometry(solution, resolution, radius, baseline, start)
     times_all = np.concatenate([left.t, right.t])
     wheels = np.concatenate([np.zeros(len(left.t), np.int64), np.ones(len(right.t), np.int64)])

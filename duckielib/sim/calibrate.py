@@ -30,10 +30,10 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from duckielib.bags import Bag, read_encoders
+from duckielib.bags import Bag
 from duckielib.errors import BagError
 from duckielib.sim.noise import NoiseProfile
-from duckielib.sim.replay import ReplayReport, replay_bag, wheel_commands
+from duckielib.sim.replay import ReplayReport, aligned_encoders, replay_bag, wheel_commands
 
 __all__ = [
     "CALIBRATION_DRIVE",
@@ -162,7 +162,7 @@ def held_commands(
     """Every command held 1 s or more but stops, with both wheels' speeds (module doc)."""
     bag = bag if isinstance(bag, Bag) else Bag(bag)
     commands = wheel_commands(bag, command_topic)
-    streams = read_encoders(bag, left_topic, right_topic)
+    streams, _ = aligned_encoders(bag, left_topic, right_topic)  # on the commands' clock
     changes = [0]
     for index in range(1, len(commands.t)):
         same = (

@@ -19,21 +19,36 @@ Laptop side; never deployed.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from dataclasses import dataclass
-from typing import Dict, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
 from duckielib.bags import Bag, read_encoders, read_topic
-from duckielib.bags.analysis import EncoderStream
+from duckielib.bags.analysis import (
+    EncoderStream,
+    PoseTrack,
+    encoder_resolution,
+    odometry_of_streams,
+)
 from duckielib.errors import BagError
 from duckielib.sim.noise import NoiseProfile, noise_profile
 from duckielib.sim.simulator import Simulator
 from duckielib.sim.world import World
 
-__all__ = ["Commands", "ReplayReport", "WheelReplay", "replay_bag", "wheel_commands"]
+__all__ = [
+    "Commands",
+    "Paths",
+    "ReplayReport",
+    "WheelReplay",
+    "aligned_encoders",
+    "replay_bag",
+    "replay_figure",
+    "wheel_commands",
+]
 
 #: The wheel commands' type, and the topics that carry them (the first found is used).
 COMMAND_TYPE = "duckietown_msgs/WheelsCmdStamped"
@@ -44,6 +59,8 @@ _OPEN_FLOOR = World(tiles_x=60, tiles_y=60)
 _COAST_S = 1.0
 #: The length of the windows whose tick rates are compared, in seconds.
 WINDOW_S = 1.0
+#: A robot's clock this far from the recorder's (seconds) is said, and the times aligned.
+SKEW_LIMIT_S = 0.5
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -85,6 +102,48 @@ class WheelReplay:
 
 
 @dataclass(frozen=True)
+class Paths:
+    """Where odometry puts the robot, from the bag's ticks and from the simulated ones.
+
+    All three start at (0, 0, 0) when the first command is sent.
+
+    Attributes:
+        real: odometry from the bag's ticks (the real robot, as its odometry saw it).
+        sim: odometry from the simulated ticks, read at the same times.
+        truth: the simulated robot's true path.
+    """
+
+    real: PoseTrack
+    sim: PoseTrack
+    truth: PoseTrack
+
+    @staticmethod
+    def heading_change(track: PoseTrack) -> float:
+        """How far a track turned in all, counter-clockwise positive, in radians."""
+        if len(track.theta) < 2:
+            return 0.0
+        unwrapped = np.unwrap(track.theta)
+        return float(unwrapped[-1] - unwrapped[0])
+
+    def figures(self) -> Dict[str, float]:
+        """The headings and final poses, and their gaps (what ``duckie sim replay`` prints)."""
+        figures: Dict[str, float] = {}
+        for name, track in (("real", self.real), ("sim", self.sim), ("sim_truth", self.truth)):
+            figures[f"heading_change_{name}_rad"] = round(self.heading_change(track), 4)
+        for name, track in (("real", self.real), ("sim", self.sim), ("sim_truth", self.truth)):
+            figures[f"final_x_{name}_m"] = round(float(track.x[-1]), 4)
+            figures[f"final_y_{name}_m"] = round(float(track.y[-1]), 4)
+        real, sim = self.heading_change(self.real), self.heading_change(self.sim)
+        figures["heading_ratio"] = round(sim / real, 4) if abs(real) > 1e-9 else math.nan
+        figures["heading_gap_rad"] = round(sim - real, 4)
+        gap = math.hypot(
+            float(self.sim.x[-1] - self.real.x[-1]), float(self.sim.y[-1] - self.real.y[-1])
+        )
+        figures["final_gap_m"] = round(gap, 4)
+        return figures
+
+
+@dataclass(frozen=True)
 class ReplayReport:
     """What a replay found, wheel by wheel, and the whole run's figures.
 
@@ -111,6 +170,8 @@ class ReplayReport:
     t: Tuple[np.ndarray, np.ndarray]
     real_ticks: Tuple[np.ndarray, np.ndarray]
     sim_ticks: Tuple[np.ndarray, np.ndarray]
+    paths: Optional[Paths] = None
+    notes: Tuple[str, ...] = ()
 
     def figures(self) -> Dict[str, Union[str, int, float]]:
         """The report as ``name: value`` pairs (what ``duckie sim replay`` prints)."""
@@ -127,6 +188,8 @@ class ReplayReport:
             figures[f"travel_ratio_{side.wheel}"] = round(side.travel_ratio, 4)
             figures[f"tick_rate_rms_{side.wheel}"] = round(side.tick_rate_rms, 3)
         figures["tick_rate_rms"] = round(self.tick_rate_rms, 3)
+        if self.paths is not None:
+            figures.update(self.paths.figures())
         return figures
 
 
@@ -183,6 +246,7 @@ def replay_bag(
     command_topic: Optional[str] = None,
     left_topic: Optional[str] = None,
     right_topic: Optional[str] = None,
+    solution: Any = None,
 ) -> ReplayReport:
     """Replay a bag's wheel commands into the simulator and compare the ticks (module doc).
 
@@ -193,14 +257,20 @@ def replay_bag(
         command_topic: the wheel commands' topic (default: found by type and name).
         left_topic: the left encoder's topic (default: found by name).
         right_topic: the right encoder's topic (default: found by name).
+        solution: what holds the odometry (``delta_phi``, ``estimate_pose``,
+            ``WheelPairing``): with it, the report also says where odometry puts the robot
+            from the bag's ticks and from the simulated ones, and where the simulated robot
+            really went (:class:`Paths`). None: travel and tick rates only.
 
     Raises:
         BagError: if the bag lacks the commands or the encoders, or they do not overlap.
+        SolutionError: if the solution's odometry is missing, unfinished or fails.
     """
     bag = bag if isinstance(bag, Bag) else Bag(bag)
     profile = noise_profile(noise)
     commands = wheel_commands(bag, command_topic)
-    streams = read_encoders(bag, left_topic, right_topic)
+    streams, skew = aligned_encoders(bag, left_topic, right_topic)
+    notes = [] if skew is None else [skew]
     start = float(commands.t[0])
     end = min(float(commands.t[-1]) + _COAST_S, *(float(s.t[-1]) for s in streams))
     kept = [_within(stream, start, end) for stream in streams]
@@ -218,7 +288,7 @@ def replay_bag(
         noise=profile,
         world=_OPEN_FLOOR,
         start_pose=(_OPEN_FLOOR.width / 2, _OPEN_FLOOR.height / 2, 0.0),
-        trace_rate_hz=0,
+        trace_rate_hz=0 if solution is None else 50.0,
     )
     readings = []
     for when, left, right in zip(commands.t - origin, commands.left, commands.right):
@@ -246,6 +316,10 @@ def replay_bag(
         real_travel, sim_travel = _travel(real), _travel(simulated)
         ratio = sim_travel / real_travel if real_travel else math.nan
         sides.append(WheelReplay(wheel, real_travel, sim_travel, ratio, _rms(error)))
+    paths = None
+    if solution is not None:
+        resolution = encoder_resolution(bag, *streams)
+        paths = _paths(solution, resolution, kept, sampled, sim, start - origin)
     return ReplayReport(
         bag=bag.path.name,
         noise=profile.name,
@@ -258,10 +332,133 @@ def replay_bag(
         t=(kept[0][0] - start, kept[1][0] - start),
         real_ticks=(kept[0][1] - kept[0][1][0], kept[1][1] - kept[1][1][0]),
         sim_ticks=(sampled[0] - sampled[0][0], sampled[1] - sampled[1][0]),
+        paths=paths,
+        notes=tuple(notes),
     )
+
+
+def aligned_encoders(
+    bag: Bag, left_topic: Optional[str] = None, right_topic: Optional[str] = None
+) -> Tuple[Tuple[EncoderStream, EncoderStream], Optional[str]]:
+    """Both encoders' readings on the recorder's clock, the one the wheel commands are read on.
+
+    A robot's clock may be far from the recorder's (a robot whose clock was never set: in
+    some real bags it runs a minute ahead). The readings are timed by their header stamps,
+    which the robot wrote, and those are moved by the clocks' gap, measured as the median
+    difference between each reading's stamp and the time it was recorded: their spacing
+    stays the robot's own.
+
+    Returns:
+        The two streams, and a sentence saying what was moved, or None when nothing was.
+    """
+    streams = read_encoders(bag, left_topic, right_topic)
+    if streams[0].time_base != "header":
+        return streams, None
+    recorded = read_encoders(bag, left_topic, right_topic, time_base="record")
+    stamped = np.concatenate([np.sort(stream.t) for stream in streams])
+    written = np.concatenate([np.sort(stream.t) for stream in recorded])
+    skew = float(np.median(stamped - written)) if len(stamped) == len(written) else 0.0
+    if abs(skew) <= SKEW_LIMIT_S:
+        return streams, None
+    moved = tuple(dataclasses.replace(stream, t=stream.t - skew) for stream in streams)
+    side = "ahead of" if skew > 0 else "behind"
+    note = (
+        f"The robot's clock ran {abs(skew):.2f} s {side} the recorder's (the encoders' "
+        "header stamps against the times they were recorded): the encoders' times were moved "
+        "onto the recorder's clock, on which the wheel commands are read."
+    )
+    return (moved[0], moved[1]), note
+
+
+def _paths(
+    solution: Any,
+    resolution: int,
+    kept: List[Tuple[np.ndarray, np.ndarray]],
+    sampled: List[np.ndarray],
+    sim: Simulator,
+    start: float,
+) -> Paths:
+    """Odometry from the bag's and the simulated ticks, and the simulated truth, from (0, 0, 0)."""
+    tracks = []
+    for label, counts in (
+        ("real ticks", [ticks for _, ticks in kept]),
+        ("simulated ticks", sampled),
+    ):
+        left, right = (
+            EncoderStream(
+                wheel, t, np.asarray(ticks, np.int64), np.full(len(t), resolution), "record"
+            )
+            for wheel, (t, _), ticks in zip(("left", "right"), kept, counts)
+        )
+        tracks.append(
+            odometry_of_streams(left, right, solution, resolution, (0.0, 0.0, 0.0), label=label)
+        )
+    trace = sim.trace
+    times = np.asarray(trace.times)
+    keep = times >= start - 1e-9
+    poses = trace.poses()[keep]
+    x0, y0, theta0 = poses[0]
+    dx, dy = poses[:, 0] - x0, poses[:, 1] - y0
+    cos, sin = math.cos(-theta0), math.sin(-theta0)
+    truth = PoseTrack(
+        times[keep] - start,
+        cos * dx - sin * dy,
+        sin * dx + cos * dy,
+        np.unwrap(poses[:, 2]) - theta0,
+        "simulated truth",
+    )
+    real, simulated = tracks
+    return Paths(real, simulated, truth)
 
 
 def _within(stream: EncoderStream, start: float, end: float) -> Tuple[np.ndarray, np.ndarray]:
     """A wheel's readings from ``start`` to ``end`` (seconds)."""
     keep = (stream.t >= start) & (stream.t <= end)
     return stream.t[keep], stream.ticks[keep].astype(np.int64)
+
+
+def replay_figure(report: ReplayReport, path: PathLike) -> str:
+    """Draw a replay's paths (needs its :class:`Paths`) and headings to ``path`` (a PNG).
+
+    Left: where odometry puts the robot from the bag's ticks and from the simulated ones, and
+    the simulated robot's true path, all from (0, 0) facing +x. Right: their headings over time.
+
+    Returns:
+        The path written.
+
+    Raises:
+        ValueError: if the report has no paths (the replay was made without a solution).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    if report.paths is None:
+        raise ValueError("The replay compared no paths: give it a solution's odometry.")
+    tracks = (
+        (report.paths.real, "odometry from the bag's ticks", "tab:blue", "-"),
+        (report.paths.sim, "odometry from the simulated ticks", "tab:orange", "-"),
+        (report.paths.truth, "the simulated robot's true path", "tab:gray", "--"),
+    )
+    fig, (where, heading) = plt.subplots(1, 2, figsize=(12, 5))
+    for track, label, color, style in tracks:
+        where.plot(track.x, track.y, style, color=color, label=label)
+        heading.plot(track.t, np.unwrap(track.theta), style, color=color, label=label)
+    where.plot([0.0], [0.0], "ko", label="start")
+    where.set_aspect("equal", adjustable="datalim")
+    where.set_xlabel("x (m), facing +x at the start")
+    where.set_ylabel("y (m)")
+    where.legend(fontsize=8)
+    heading.set_xlabel("t (s) from the first command")
+    heading.set_ylabel("heading (rad), unwrapped")
+    figures = report.paths.figures()
+    real, simulated = figures["heading_change_real_rad"], figures["heading_change_sim_rad"]
+    fig.suptitle(
+        f"{report.bag} replayed on {report.noise}: heading {real:+.2f} rad on the bag, "
+        f"{simulated:+.2f} rad simulated"
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return str(path)

@@ -389,6 +389,12 @@ def _add_simulator(commands: argparse._SubParsersAction) -> None:
         help="the simulated robot: ideal, realistic (default) or a profile file (.json)",
     )
     replay.add_argument("--seed", type=_seed, default=0, help="the simulator's seed (default 0)")
+    replay.add_argument(
+        "--solution",
+        help="the odometry that turns ticks into headings and paths: your notebooks' folder "
+        "(course) or a file made by duckie export (default: the reference, where there is one)",
+    )
+    replay.add_argument("--plot", help="draw both paths and headings to this file (.png)")
     _add_replay_topics(replay)
     replay.add_argument("--json", action="store_true", help="print the figures as JSON")
     replay.set_defaults(handler=_sim_replay)
@@ -441,11 +447,39 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _sim_replay(args: argparse.Namespace) -> int:
-    from duckielib.sim.replay import replay_bag
+    from duckielib.sim.replay import replay_bag, replay_figure
 
-    report = replay_bag(args.bag, args.noise, args.seed, args.commands, args.left, args.right)
+    solution = _odometry_solution(args.solution)
+    report = replay_bag(
+        args.bag, args.noise, args.seed, args.commands, args.left, args.right, solution
+    )
     _print_figures(report.figures(), args.json)
+    for note in report.notes:
+        print(f"note: {note}", file=sys.stderr)
+    if report.paths is None:
+        print(
+            "note: headings and paths were not compared (the travel alone does not say where "
+            "the robot went): give --solution course to compare them with your odometry "
+            "(notebook 05).",
+            file=sys.stderr,
+        )
+        if args.plot:
+            raise DuckielibError("--plot draws the paths: give --solution course as well.")
+    elif args.plot:
+        print(f"wrote {replay_figure(report, args.plot)}", file=sys.stderr)
     return 0
+
+
+def _odometry_solution(given: Optional[str]) -> Any:
+    """The solution whose odometry a replay uses: ``given``, or the reference if it is there."""
+    from duckielib.solution import ODOMETRY_PARTS, load_solution, reference_solution_dir
+
+    if given is None:
+        try:
+            reference_solution_dir()
+        except DuckielibError:  # a student's copy of the course: no reference
+            return None
+    return load_solution(given, required=ODOMETRY_PARTS)
 
 
 def _sim_motors(args: argparse.Namespace) -> int:

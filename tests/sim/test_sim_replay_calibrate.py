@@ -42,9 +42,10 @@ def stamp(seconds):
     return Header(stamp=Time.from_sec(seconds))
 
 
-def record_drive(path, profile, drive=DRIVE, seed=3, start=5.0):
+def record_drive(path, profile, drive=DRIVE, seed=3, start=5.0, clock_ahead=0.0):
     """A bag of the simulator driving ``drive``: commands at 10 Hz and both encoders' ticks,
-    stamped from ``start`` seconds (as a robot's clock would)."""
+    stamped from ``start`` seconds (as a robot's clock would), ``clock_ahead`` seconds ahead
+    of the times they are recorded at."""
     sim = Simulator(seed=seed, noise=profile, world=World(tiles_x=30, tiles_y=30),
                     start_pose=(8.0, 8.0, 0.0), trace_rate_hz=0)  # fmt: skip
     with BagWriter(path) as bag:
@@ -55,14 +56,16 @@ def record_drive(path, profile, drive=DRIVE, seed=3, start=5.0):
                 sim.run_until(now)
                 sim.set_wheel_duties(left, right)
                 message = WheelsCmdStamped(
-                    header=stamp(start + now), vel_left=left, vel_right=right
+                    header=stamp(start + clock_ahead + now), vel_left=left, vel_right=right
                 )
                 bag.write(
                     VEH + "wheels_driver_node/wheels_cmd", message, round((start + now) * 1e9)
                 )
                 for reading in sim.pop_encoder_readings():
                     tick = WheelEncoderStamped(
-                        header=stamp(start + reading.time), data=reading.ticks, resolution=135
+                        header=stamp(start + clock_ahead + reading.time),
+                        data=reading.ticks,
+                        resolution=135,
                     )
                     topic = f"{VEH}{reading.wheel}_wheel_encoder_node/tick"
                     bag.write(topic, tick, round((start + reading.time) * 1e9))
@@ -261,3 +264,59 @@ def test_without_arcs_the_straight_runs_and_turns_in_place_still_tell_the_wheels
     only_straight = [step for step in DRIVE if step[0] == step[1]]
     straight = calibrate_bag(record_drive(tmp_path / "straight.bag", UNUSUAL, drive=only_straight))
     assert straight.profile.turning_resistance == 0.0
+
+
+def test_a_replay_says_where_odometry_puts_the_robot_not_only_how_far_the_wheels_turned(
+    tmp_path, capsys
+):
+    from duckielib.solution import ODOMETRY_PARTS, load_solution
+    from duckielib.tools.cli import main
+
+    bag = record_drive(tmp_path / "unusual.bag", UNUSUAL)
+    solution = load_solution(None, required=ODOMETRY_PARTS)
+    same = replay_bag(bag, noise=UNUSUAL, seed=3, solution=solution).figures()
+    # The bag's own robot: the same ticks, so the same headings and the same final pose.
+    assert same["heading_ratio"] == 1.0
+    assert same["final_gap_m"] == 0.0
+    assert same["heading_change_real_rad"] == same["heading_change_sim_rad"] != 0.0
+    # The ideal robot drives the same commands: its wheels turn more, and its turn in place
+    # and its arcs turn it elsewhere. The figures say by how much, and odometry agrees with
+    # the simulated robot's true heading, from which it is computed.
+    ideal = replay_bag(bag, noise="ideal", seed=3, solution=solution).figures()
+    assert abs(ideal["heading_gap_rad"]) > 0.3, ideal
+    assert ideal["final_gap_m"] > 0.3, ideal
+    assert ideal["heading_change_sim_rad"] == pytest.approx(
+        ideal["heading_change_sim_truth_rad"], abs=0.15
+    )
+    plot = tmp_path / "replay.png"
+    assert (
+        main(["sim", "replay", str(bag), "--noise", "ideal", "--seed", "3", "--plot", str(plot)])
+        == 0
+    )
+    lines = dict(
+        line.split(": ", 1) for line in capsys.readouterr().out.splitlines() if ": " in line
+    )
+    assert float(lines["heading_gap_rad"]) == ideal["heading_gap_rad"]
+    assert float(lines["final_gap_m"]) == ideal["final_gap_m"]
+    assert plot.read_bytes().startswith(b"\x89PNG")
+
+
+def test_a_robot_clock_a_minute_ahead_is_said_and_the_times_aligned(tmp_path, capsys):
+    from duckielib.tools.cli import main
+
+    on_time = record_drive(tmp_path / "on_time.bag", UNUSUAL)
+    ahead = record_drive(tmp_path / "ahead.bag", UNUSUAL, clock_ahead=60.26)
+    report = replay_bag(ahead, noise=UNUSUAL, seed=3)
+    assert report.notes == (
+        "The robot's clock ran 60.26 s ahead of the recorder's (the encoders' header stamps "
+        "against the times they were recorded): the encoders' times were moved onto the "
+        "recorder's clock, on which the wheel commands are read.",
+    )
+    assert report.figures() == replay_bag(on_time, noise=UNUSUAL, seed=3).figures() | {
+        "bag": "ahead.bag"
+    }
+    # Calibrating pairs the commands with the ticks of the same moments.
+    fitted = calibrate_bag(ahead).figures()
+    assert fitted == calibrate_bag(on_time).figures() | {"bag": "ahead.bag"}
+    assert main(["sim", "replay", str(ahead), "--noise", "ideal"]) == 0
+    assert "note: The robot's clock ran 60.26 s ahead" in capsys.readouterr().err
