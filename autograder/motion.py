@@ -543,6 +543,10 @@ def state_motions(
 _END_PROBLEMS = ("The robot ended ", "The bag has no ground truth")
 
 
+#: How the mission report's sentence about a wall the robot touched begins.
+_WALL_PROBLEM = "The robot touched the mat's wall"
+
+
 def driving_problems(report: MissionReport, motions: Sequence[StateMotion]) -> List[str]:
     """The report's problems, with its sentence about the end replaced by the moves' own.
 
@@ -557,9 +561,14 @@ def driving_problems(report: MissionReport, motions: Sequence[StateMotion]) -> L
             "The bag has no ground truth (simulator_node/ground_truth_pose), so what the robot "
             "really did cannot be checked.",
         )
+    # A wall the robot touched explains the moves' problems: it comes right after them.
+    walls = [problem for problem in report.problems if problem.startswith(_WALL_PROBLEM)]
+    moves += walls
     problems: List[str] = []
     placed = False
     for problem in report.problems:
+        if problem in walls:
+            continue
         is_end = problem.startswith(_END_PROBLEMS)
         if not placed and (is_end or problem.startswith("The bag has no odometry")):
             problems += moves

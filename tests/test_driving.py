@@ -199,9 +199,11 @@ def test_the_realistic_robot_is_judged_by_where_it_really_went(tmp_path):
     assert driving.parts["states"] == 20
     assert driving.parts["stops"] == 15
     assert driving.score < 60
-    first = driving.reasons[0]
+    first = next(reason for reason in driving.reasons if reason.startswith("In state"))
     turned = int(re.match(r"In state square, turn 1 turned (\d+)° clockwise", first).group(1))
     assert 70 <= turned <= 85, first
+    # The drifting robot reaches the mat's wall, and the reasons say so.
+    assert any(reason.startswith("The robot touched the mat's wall") for reason in driving.reasons)
 
 
 def test_a_robot_that_never_drives_loses_every_driving_point(tmp_path, reference):
@@ -245,6 +247,8 @@ def test_a_square_turned_the_wrong_way_loses_the_square_but_not_the_circle(tmp_p
         "bag": 5, "states": 20, "stops": 15, "square": 3.33, "return": 0, "circle": 6.67,
     }  # fmt: skip
     assert driving.reasons[0] == "In state square, turn 1 turned 0°; it should turn 90° clockwise."
+    walls = [reason for reason in driving.reasons if reason.startswith("The robot touched")]
+    assert len(walls) == 1, driving.reasons  # pinned against the wall beside its start
     assert "In state circle, the circle turned 117° clockwise; it should turn 360° clockwise." in (
         driving.reasons
     )

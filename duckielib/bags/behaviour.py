@@ -52,6 +52,8 @@ STILL_TOLERANCE_M = 0.01
 
 #: The true end must be this close to the start, in metres.
 CLOSURE_TOLERANCE_M = 0.10
+#: Touches of a wall less than this apart (seconds) are said as one.
+CONTACT_GAP_S = 1.0
 
 #: After ``done`` the wheels have this long to come to rest (the motors lag), in seconds.
 COAST_S = 0.5
@@ -121,6 +123,9 @@ class MissionReport:
             :data:`COAST_S` to come to rest: (seconds watched, at most
             :data:`STILL_AFTER_DONE_S`; metres rolled; radians turned), or None when the bag
             shows no ``done`` or no truth after it.
+        wall_contacts: when the robot touched one of the mat's walls, as (start, end) in
+            seconds from ``started`` (the simulator's ``simulator_node/wall_contact``; empty
+            when it never did, or the bag cannot tell).
         problems: what differs from the mission, one sentence each (empty when all is well).
     """
 
@@ -133,6 +138,7 @@ class MissionReport:
     final_pose_truth: Optional[Pose] = None
     distance_to_start: Optional[float] = None
     after_done: Optional[Tuple[float, float, float]] = None
+    wall_contacts: List[Tuple[float, float]] = field(default_factory=list)
     problems: List[str] = field(default_factory=list)
 
     @property
@@ -200,6 +206,9 @@ class MissionReport:
             "odometry_error": None
             if error is None
             else {"distance": round(error[0], 4), "heading": round(error[1], 4)},
+            "wall_contacts": [
+                [round(start, 3), round(end, 3)] for start, end in self.wall_contacts
+            ],
             "checks": {
                 "states_in_order": self.states_in_order,
                 "stops_held": self.stops_held,
@@ -391,6 +400,12 @@ def mission_report(
     report.total_time = (end_time - t0) if announcements else 0.0
     if done and truth is not None:
         report.after_done = _after_done(truth, done[0])
+    contact_topic = namespace + "simulator_node/wall_contact"
+    if contact_topic in topics:
+        changes = [(item.time, bool(item.message.data)) for item in bag.read(contact_topic)]
+        report.wall_contacts = [
+            (start - t0, end - t0) for start, end in _intervals(changes, last_time)
+        ]
     if odometry is not None:
         report.final_pose_odometry = _pose_at(odometry, last_time)
     if truth is not None:
@@ -399,6 +414,39 @@ def mission_report(
         report.distance_to_start = math.hypot(x - mission.start[0], y - mission.start[1])
     report.problems += _problems(report)
     return report
+
+
+def _intervals(changes: List[Tuple[float, bool]], end: float) -> List[Tuple[float, float]]:
+    """The (start, end) times during which a flag that changes at ``changes`` was true.
+
+    Intervals less than :data:`CONTACT_GAP_S` apart are one (a robot pushing along a wall
+    touches and leaves it many times a second).
+    """
+    intervals: List[Tuple[float, float]] = []
+    since: Optional[float] = None
+    for t, on in changes:
+        if on and since is None:
+            since = t
+        elif not on and since is not None:
+            if intervals and since - intervals[-1][1] < CONTACT_GAP_S:
+                since = intervals.pop()[0]
+            intervals.append((since, t))
+            since = None
+    if since is not None:
+        if intervals and since - intervals[-1][1] < CONTACT_GAP_S:
+            since = intervals.pop()[0]
+        intervals.append((since, max(since, end)))
+    return intervals
+
+
+def _wall_problem(report: MissionReport) -> str:
+    """The sentence for a robot that touched a wall: where, and for how long."""
+    spans = ", ".join(f"{start:.1f} s to {end:.1f} s" for start, end in report.wall_contacts)
+    total = sum(end - start for start, end in report.wall_contacts)
+    return (
+        f"The robot touched the mat's wall ({spans}; {total:.1f} s in all): there the wall "
+        "held it, whatever its wheels did, so the path after it is not the mission node's alone."
+    )
 
 
 def _closure_problem(report: MissionReport) -> str:
@@ -413,10 +461,14 @@ def _closure_problem(report: MissionReport) -> str:
     if believed is not None:
         away = math.hypot(believed[0] - start[0], believed[1] - start[1])
         if away <= CLOSURE_TOLERANCE_M:
+            cause = (
+                "the wall it touched and odometry's drift"
+                if report.wall_contacts
+                else "odometry's drift (wheels, track and slip unlike the nominal ones)"
+            )
             problem += (
                 f" Its odometry believed it was {100 * away:.1f} cm from the start: the "
-                "difference is odometry's drift (wheels, track and slip unlike the nominal "
-                "ones), not the mission node's."
+                f"difference is {cause}, not the mission node's."
             )
     return problem
 
@@ -428,6 +480,8 @@ def _problems(report: MissionReport) -> List[str]:
     problems += _state_problems(report)
     if not report.still_after_done:
         problems.append(_after_done_problem(report))
+    if report.wall_contacts:
+        problems.append(_wall_problem(report))
     if report.distance_to_start is None:
         problems.append("The bag has no ground truth, so the end cannot be checked.")
     elif not report.closed:

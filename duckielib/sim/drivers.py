@@ -416,6 +416,9 @@ class GroundTruthNode:
     Publishers:
         ~ground_truth_pose (Pose2DStamped): the true pose of the axle midpoint in the world
             frame (x, y in metres, theta in radians in [0, 2*pi)), 30 Hz.
+        ~wall_contact (std_msgs/Bool, latched): whether the chassis touches one of the mat's
+            walls: published with the first pose, then each time it changes (checked at the
+            pose's rate).
     """
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
@@ -427,10 +430,18 @@ class GroundTruthNode:
         )
         self.pose = self.msg.Pose2DStamped()  # refilled for each publication
         self.pose.header.frame_id = "world"
+        self.pub_contact = rospy.Publisher(
+            veh + "simulator_node/wall_contact", self.msg.Bool, queue_size=1, latch=True
+        )
+        self.touching: Optional[bool] = None  # none published yet
 
     def publish(self, t_ns: int) -> None:
-        """Publish the true pose at time ``t_ns``."""
+        """Publish the true pose at time ``t_ns``, and the wall contact if it changed."""
         pose = self.pose
         pose.x, pose.y, pose.theta = self.sim.pose
         pose.header.stamp = stamp_at(self.rospy, t_ns)
         self.pub_pose.publish(pose)
+        touching = self.sim.touching_wall
+        if touching != self.touching:
+            self.touching = touching
+            self.pub_contact.publish(self.msg.Bool(data=touching))

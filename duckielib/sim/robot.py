@@ -280,6 +280,8 @@ class Robot:
         chassis.friction = 0.5
         chassis.elasticity = 0.0
         space.add(self.body, chassis)
+        #: The chassis' outline in the space (its bounding box says where the robot reaches).
+        self.chassis = chassis
 
         mu = noise.friction_coefficient
         mu = NO_SLIP_FRICTION if mu is None else mu

@@ -49,6 +49,8 @@ PHYSICS_RATE_HZ = 100.0
 
 #: Default rate at which the true path is recorded, in Hz.
 TRACE_RATE_HZ = 30.0
+#: How close to a wall the chassis counts as touching it, in metres (pymunk's slop is 0.5 mm).
+WALL_TOUCH_M = 0.002
 
 #: Range the encoders' start counts are drawn from when none are given.
 _INITIAL_TICKS_RANGE = (10_000, 60_000)
@@ -362,6 +364,20 @@ class Simulator:
     def pose(self) -> Pose:
         """The true pose (x, y, theta) of the axle midpoint; metres, radians in [0, 2*pi)."""
         return self.robot.pose
+
+    @property
+    def touching_wall(self) -> bool:
+        """Whether the robot's chassis touches one of the mat's walls (within 2 mm)."""
+        if not self.world.walls:
+            return False
+        box = self.robot.chassis.bb
+        width, height = self.world.width, self.world.height
+        return (
+            box.left <= WALL_TOUCH_M
+            or box.bottom <= WALL_TOUCH_M
+            or box.right >= width - WALL_TOUCH_M
+            or box.top >= height - WALL_TOUCH_M
+        )
 
     @property
     def twist(self) -> Twist:

@@ -5,7 +5,8 @@
 light service node and mission node), records a ROS 1 bag, and when the mission is over writes
 what happened to a folder::
 
-    mission.bag       poses (odometry and truth), encoder ticks, commands, LEDs, states
+    mission.bag       poses (odometry and truth), encoder ticks, commands, LEDs, states,
+                      when the robot touched a wall
     trajectory.png    the path on the mat and x, y, theta over time, odometry against truth
     mission.gif       the same path, animated
     summary.json      the states with their LED colours and times, the final poses, the
@@ -70,6 +71,7 @@ OUTPUTS = ("mission.bag", "trajectory.png", "mission.gif", "summary.json", "log.
 RECORDED = (
     "odometry_node/pose",
     "simulator_node/ground_truth_pose",
+    "simulator_node/wall_contact",
     "left_wheel_encoder_node/tick",
     "right_wheel_encoder_node/tick",
     "car_cmd_switch_node/cmd",
@@ -145,6 +147,8 @@ class MissionRun:
                 f"odometry is {100 * error[0]:.1f} cm and {math.degrees(error[1]):.1f} deg from "
                 f"the truth; the robot ended {100 * report.distance_to_start:.1f} cm from the start"
             )
+        for start, end in report.wall_contacts:
+            lines.append(f"the robot touched a wall from {start:.1f} s to {end:.1f} s")
         lines += [f"problem: {problem}" for problem in report.problems]
         if not report.problems:
             lines.append("every check passed: states and colours in order, stops held, back home")

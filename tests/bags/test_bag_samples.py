@@ -18,11 +18,14 @@ def test_the_sample_is_a_whole_mission_whose_odometry_drifts_as_a_real_robots():
     assert report.states_in_order
     assert report.stops_held
     assert report.finished
-    # Its odometry believes it is home; by the ground truth it ended tens of centimetres away.
+    # Its odometry believes it is home; by the ground truth it ended tens of centimetres away,
+    # after its drift took it to the mat's wall, which held it there: the report says both.
     assert not report.closed
     assert 0.2 < report.distance_to_start < 0.7
-    assert len(report.problems) == 1
-    assert "the difference is odometry's drift" in report.problems[0]
+    assert len(report.problems) == 2
+    assert report.problems[0].startswith("The robot touched the mat's wall (")
+    assert sum(end - start for start, end in report.wall_contacts) > 20
+    assert "the difference is the wall it touched and odometry's drift" in report.problems[1]
 
 
 @pytest.mark.slow

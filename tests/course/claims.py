@@ -1306,10 +1306,10 @@ _STATES_10 = (
 
 CLAIMS["10_bag_analysis"] = [
     Claim(
-        says="Eight topics, all under the robot's namespace (`/duckiebot/`)",
-        printed=r"topics:(?:\s+/duckiebot/\S+\s+\d+ msgs\s+: \S+\n){8}(?!\s+/)",
+        says="Nine topics, all under the robot's namespace (`/duckiebot/`)",
+        printed=r"topics:(?:\s+/duckiebot/\S+\s+\d+ msgs\s+: \S+\n){9}(?!\s+/)",
         holds=lambda: True,
-        meaning="the mission's bag holds eight topics, all under /duckiebot/",
+        meaning="the mission's bag holds nine topics, all under /duckiebot/",
     ),
     Claim(
         says="about 30 per second per wheel",
