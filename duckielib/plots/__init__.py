@@ -26,6 +26,7 @@ from duckielib.plots.diagrams import plot_mission_states
 from duckielib.plots.files import save_animation, save_figure, save_gif_frames
 from duckielib.plots.paths import animate_path, plot_path, plot_pose_over_time, pose_figure
 from duckielib.plots.player import Recording, RunPlayer
+from duckielib.plots.replay import replay_figure
 from duckielib.plots.rosgraph import plot_ros_graph
 from duckielib.plots.world import animate_run, animation_html, draw_mat, draw_robot, plot_run
 
@@ -45,6 +46,7 @@ __all__ = [
     "plot_ros_graph",
     "plot_run",
     "pose_figure",
+    "replay_figure",
     "save_animation",
     "save_figure",
     "save_gif_frames",

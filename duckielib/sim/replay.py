@@ -46,7 +46,6 @@ __all__ = [
     "WheelReplay",
     "aligned_encoders",
     "replay_bag",
-    "replay_figure",
     "wheel_commands",
 ]
 
@@ -415,50 +414,3 @@ def _within(stream: EncoderStream, start: float, end: float) -> Tuple[np.ndarray
     """A wheel's readings from ``start`` to ``end`` (seconds)."""
     keep = (stream.t >= start) & (stream.t <= end)
     return stream.t[keep], stream.ticks[keep].astype(np.int64)
-
-
-def replay_figure(report: ReplayReport, path: PathLike) -> str:
-    """Draw a replay's paths (needs its :class:`Paths`) and headings to ``path`` (a PNG).
-
-    Left: where odometry puts the robot from the bag's ticks and from the simulated ones, and
-    the simulated robot's true path, all from (0, 0) facing +x. Right: their headings over time.
-
-    Returns:
-        The path written.
-
-    Raises:
-        ValueError: if the report has no paths (the replay was made without a solution).
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    if report.paths is None:
-        raise ValueError("The replay compared no paths: give it a solution's odometry.")
-    tracks = (
-        (report.paths.real, "odometry from the bag's ticks", "tab:blue", "-"),
-        (report.paths.sim, "odometry from the simulated ticks", "tab:orange", "-"),
-        (report.paths.truth, "the simulated robot's true path", "tab:gray", "--"),
-    )
-    fig, (where, heading) = plt.subplots(1, 2, figsize=(12, 5))
-    for track, label, color, style in tracks:
-        where.plot(track.x, track.y, style, color=color, label=label)
-        heading.plot(track.t, np.unwrap(track.theta), style, color=color, label=label)
-    where.plot([0.0], [0.0], "ko", label="start")
-    where.set_aspect("equal", adjustable="datalim")
-    where.set_xlabel("x (m), facing +x at the start")
-    where.set_ylabel("y (m)")
-    where.legend(fontsize=8)
-    heading.set_xlabel("t (s) from the first command")
-    heading.set_ylabel("heading (rad), unwrapped")
-    figures = report.paths.figures()
-    real, simulated = figures["heading_change_real_rad"], figures["heading_change_sim_rad"]
-    fig.suptitle(
-        f"{report.bag} replayed on {report.noise}: heading {real:+.2f} rad on the bag, "
-        f"{simulated:+.2f} rad simulated"
-    )
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return str(path)

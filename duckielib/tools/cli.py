@@ -447,7 +447,8 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _sim_replay(args: argparse.Namespace) -> int:
-    from duckielib.sim.replay import replay_bag, replay_figure
+    from duckielib.plots.replay import replay_figure
+    from duckielib.sim.replay import replay_bag
 
     solution = _odometry_solution(args.solution)
     report = replay_bag(

@@ -181,12 +181,32 @@ STARTED = """(prompts) => [...document.querySelectorAll(prompts)]
     .some((prompt) => /\\[(\\*|\\d+)\\]/.test(prompt.textContent))"""
 
 
+def _session_ready(port, path, seconds=180):
+    """Start the notebook's kernel through the server's API (it answers once it is started).
+
+    The page then finds its session running. Left to the page, a kernel slow to start (a
+    loaded machine) makes JupyterLab ask which kernel to start, in a dialog.
+    """
+    body = json.dumps(
+        {"path": path, "type": "notebook", "name": "", "kernel": {"name": "python3"}}
+    ).encode()
+    request = urllib.request.Request(
+        f"http://127.0.0.1:{port}/api/sessions?token={TOKEN}",
+        data=body,
+        method="POST",
+        headers={"Content-Type": "application/json"},
+    )
+    with urllib.request.urlopen(request, timeout=seconds) as response:
+        assert json.loads(response.read())["kernel"]["name"] == "python3"
+
+
 def run_all_in_the_browser(page, port, name):
     """Open a notebook of course/ alone, Run > Run All Cells, wait until Run All is over.
 
     ``reset`` starts from an empty workspace: the notebooks opened before are not restored
     beside it.
     """
+    _session_ready(port, f"course/{name}/{name}.ipynb")
     page.goto(f"http://127.0.0.1:{port}/lab/tree/course/{name}/{name}.ipynb?reset&token={TOKEN}")
     idle = f"{SHOWN} .jp-Notebook-ExecutionIndicator[data-status='idle']"
     page.wait_for_selector(idle, timeout=60_000)

@@ -166,7 +166,7 @@ def test_the_virtual_duckiebots_drivers_and_a_client(bot):
     assert snapshot.publishers(VEH + "joy_mapper_node/car_cmd") == []
     wheels_cmd = GraphTopic(wheels + "/wheels_cmd", "duckietown_msgs/WheelsCmdStamped")
     assert wheels_cmd in snapshot.topics
-    assert len(snapshot.topics) == 11
+    assert len(snapshot.topics) == 12  # the wall contact too: the simulator's, as its truth
     assert [service.name for service in snapshot.services] == [
         VEH + "led_emitter_node/set_custom_pattern",
         SET_PATTERN,
@@ -328,7 +328,7 @@ def test_the_virtual_duckiebot_relative_to_its_namespace(monkeypatch):
         bot.shutdown()
     where = boxes(ax)
     assert len(where) == len(snapshot.nodes) + len(snapshot.topics) + len(snapshot.services)
-    assert len(arrows(ax)) == len(snapshot.edges) == 17  # 16 between the drivers, 1 call
+    assert len(arrows(ax)) == len(snapshot.edges) == 18  # 17 between the drivers, 1 call
     assert "names relative to /duckiebot/" in legend(ax)
     kinematics = where["kinematics_node"][1]
     wheels_cmd = where["wheels_driver_node/wheels_cmd\nduckietown_msgs/WheelsCmdStamped"][1]
