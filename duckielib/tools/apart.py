@@ -18,7 +18,6 @@ import argparse
 import contextlib
 import functools
 import os
-import re
 import socket
 import subprocess
 import sys
@@ -40,15 +39,15 @@ from typing import (
 from duckielib.errors import ConfigError, DuckielibError
 from duckielib.missions import Mission, mission_named
 from duckielib.tools.runner import (
-    _STUDENT_NODES,
     DEFAULT_TIME_LIMIT_S,
     RECORDED,
     MissionError,
-    _crash_message,
     _failure,
     _part,
     chosen_mission,
     finish_run,
+    logged_error,
+    node_crash,
     run_files,
 )
 
@@ -477,14 +476,9 @@ def serve_nodes(
     crash: Optional[Tuple[type, str]] = None
     try:
         ended = link.serve(lambda: bool(finished))
-        crash = None if ended else _logged_error(graph)
+        crash = None if ended else logged_error(graph)
     except NodeCrashed as error:
-        node = error.node.rsplit("/", 1)[-1]
-        if error.__cause__ is None:  # stopped by the graph itself (code that never waits)
-            said = str(error).split(": ", 1)[-1]
-            crash = (MissionError, f"The {node.replace('_', ' ')} stopped: {said}")
-        else:
-            crash = _crash_message(node.replace("_", " "), error.__cause__)
+        crash = node_crash(error)
     except SolutionError as error:
         crash = (SolutionError, str(error))
     except LinkError:
@@ -499,21 +493,6 @@ def serve_nodes(
     except (LinkError, OSError):
         return stopped, log, False
     return stopped, log, True
-
-
-def _logged_error(graph: Any) -> Optional[Tuple[type, str]]:
-    """The first error a student's node logged, as what stopped the run; None if none did."""
-    from duckielib.ros.log import ERROR
-
-    errors = [
-        record
-        for record in graph.log
-        if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
-    ]
-    if not errors:
-        return None
-    said = re.sub(r"^(?:\w+\.)+(?=\w+: )", "", errors[0].text.splitlines()[-1])
-    return (MissionError, f"The {errors[0].node} logged an error: {said.rstrip('.')}.")
 
 
 def _arguments(argv: Optional[List[str]]) -> argparse.Namespace:

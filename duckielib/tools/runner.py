@@ -58,6 +58,8 @@ __all__ = [
     "chosen_mission",
     "drive_and_record",
     "finish_run",
+    "logged_error",
+    "node_crash",
     "run_files",
     "run_mission",
     "trajectory_figure",
@@ -437,7 +439,6 @@ def drive_and_record(
     from duckielib.bags.behaviour import AFTER_DONE_S
     from duckielib.nodes import odometry_node
     from duckielib.ros.graph import STALL_LIMIT_S, Graph, NodeCrashed
-    from duckielib.ros.log import ERROR
     from duckielib.sim import VirtualDuckiebot
 
     graph = Graph(echo_logs=False, stall_limit=stall_limit or STALL_LIMIT_S)
@@ -462,23 +463,9 @@ def drive_and_record(
         # Once the node has returned, watch the robot a while: wheels it left turning show in
         # the bag (the report checks that the robot stands still after 'done').
         bot.run(AFTER_DONE_S if ended else 0.2)  # and the last messages arrive
-        errors = [
-            record
-            for record in graph.log
-            if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
-        ]
-        if errors and not ended:
-            # The last line of the first traceback, its error's class without its module.
-            said = re.sub(r"^(?:\w+\.)+(?=\w+: )", "", errors[0].text.splitlines()[-1])
-            crash = (MissionError, f"The {errors[0].node} logged an error: {said.rstrip('.')}.")
+        crash = None if ended else logged_error(graph)
     except NodeCrashed as error:
-        node = error.node.rsplit("/", 1)[-1]
-        if error.__cause__ is None:  # stopped by the graph itself (code that never waits)
-            said = str(error).split(": ", 1)[-1]
-            crash = (MissionError, f"The {node.replace('_', ' ')} stopped: {said}")
-        else:
-            crash = _crash_message(node.replace("_", " "), error.__cause__)
-        ended = False
+        crash, ended = node_crash(error), False
     finally:
         bot.shutdown()
         recorder.close()
@@ -498,6 +485,31 @@ def drive_and_record(
         wall,
         _failure(crash, ended, files, bot.namespace, time_limit, graph),
     )
+
+
+def logged_error(graph: Any) -> Optional[Tuple[type, str]]:
+    """The first error a student's node logged, as what stopped the run; None if none did."""
+    from duckielib.ros.log import ERROR
+
+    errors = [
+        record
+        for record in graph.log
+        if record.level >= ERROR and record.node.rsplit("/", 1)[-1] in _STUDENT_NODES
+    ]
+    if not errors:
+        return None
+    # The last line of the first traceback, its error's class without its module.
+    said = re.sub(r"^(?:\w+\.)+(?=\w+: )", "", errors[0].text.splitlines()[-1])
+    return (MissionError, f"The {errors[0].node} logged an error: {said.rstrip('.')}.")
+
+
+def node_crash(error: Any) -> Tuple[type, str]:
+    """What stopped a run whose node crashed (a :class:`~duckielib.ros.graph.NodeCrashed`)."""
+    node = error.node.rsplit("/", 1)[-1]
+    if error.__cause__ is None:  # stopped by the graph itself (code that never waits)
+        said = str(error).split(": ", 1)[-1]
+        return (MissionError, f"The {node.replace('_', ' ')} stopped: {said}")
+    return _crash_message(node.replace("_", " "), error.__cause__)
 
 
 def _failure(

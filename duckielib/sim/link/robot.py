@@ -194,19 +194,7 @@ class RobotLink:
             [data for _, data in outbox],
         )
         self._exchanged_at = t
-        while True:
-            header, body = self._receive()
-            kind = header["k"]
-            if kind == "call":
-                self._answer_call(header, body)
-            elif kind == "idle":
-                break
-            elif kind == "bye":
-                raise self._bye(header, body) or NodesStopped(
-                    "mission", "The nodes stopped before the mission's end."
-                )
-            else:
-                self._unexpected(header, "idle")
+        header, body = self._await("idle")
         following = header.get("next")
         if following is not None and (type(following) is not int or following < t):
             raise LinkError("the nodes' side gave a time in the past for its next step")
@@ -249,7 +237,7 @@ class RobotLink:
             elif header["k"] == wanted:
                 return header, body
             else:
-                self._unexpected(header, wanted)
+                self._unexpected(header, wanted, body)
 
     def _bye(self, header: Dict[str, Any], body: bytes) -> Optional[NodesStopped]:
         self._take_publishers(header.get("pubs", []))
@@ -505,9 +493,9 @@ class RobotLink:
                 raise OutOfWallTime("the run's wall-clock time is over") from None
             raise
 
-    def _unexpected(self, header: Dict[str, Any], wanted: str) -> None:
+    def _unexpected(self, header: Dict[str, Any], wanted: str, body: bytes = b"") -> None:
         if header["k"] == "bye":
-            raise self._bye(header, b"") or NodesStopped(
+            raise self._bye(header, body) or NodesStopped(
                 "mission", "The nodes stopped before the mission's end."
             )
         raise LinkError(f"the nodes' side sent {header['k'][:20]!r} where {wanted!r} was due")
