@@ -1,18 +1,20 @@
-"""Fit the simulator's motors to a robot: each wheel's speed for each command, from a bag.
+"""Fit the simulator's motors to a robot, from any bag of it driving.
 
-A bag that holds the wheel commands and both encoders' ticks says, for every command held
-long enough, how fast each wheel really turned. :func:`calibrate_bag` finds those steady
-stretches (a command held 1 s or more; its second half, once the wheel has settled) and
-measures each wheel's speed there. The commands that drive straight or turn the wheels opposite
-ways give each motor's speed curve: the dead band (the largest command that does not turn the
-wheel, extended from the two slowest speeds) and a knot at every command measured, extended in
-a straight line to duty 1. The arcs (both wheels the same way, at different commands) give
-the ground's resistance to turning, the value that best predicts how far their slow wheel was
-dragged along (without arcs, straight runs set against turns in place give it roughly; with
-straight runs only, it is left at 0). The fitted profile keeps the realistic profile's other
-imperfections (wheel size and track, slip, encoder jitter, the encoder driver's counting rule:
-encoders alone cannot measure them) and is checked by replaying the bag's commands into it
-(:mod:`.replay`).
+A bag that holds the wheel commands and both encoders' ticks says how far each command really
+turned each wheel, whether the commands were held (a calibration drive) or changed many times
+a second (a controller closing its loop: a mission, lane following). :func:`calibrate_bag`
+replays the bag's whole command sequence through the simulator's motors
+(:mod:`.wheels`, the motors without the physics) and fits them by least squares: each wheel's
+ticks window by window, the drift of each wheel and of the turn between them (the right
+wheel's ticks minus the left's, which odometry's heading comes from) over the whole run. The
+model is one speed curve (a dead band, then knots where the commands spent their time, then
+the realistic curve's shape to duty 1), the right motor's gain on it and the ground's
+resistance to turning. What a bag cannot say (a curve beyond the duties it drove, a ground
+never turned on) keeps the realistic robot's value: a weak prior ties every parameter to it.
+The fitted profile keeps the realistic profile's other imperfections (wheel size and track,
+slip, encoder jitter, the encoder driver's counting rule: encoders alone cannot measure them)
+and is checked by replaying the bag into it with the simulator itself (:mod:`.replay`), and
+other bags of the robot too (``check``).
 
 ``duckie calibrate BAG -o robot.json`` writes the profile; ``duckie mission --noise
 robot.json`` then drives a simulated robot that behaves like yours.
@@ -29,11 +31,14 @@ from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
+from scipy.optimize import least_squares
 
 from duckielib.bags import Bag
+from duckielib.bags.analysis import encoder_resolution
 from duckielib.errors import BagError
-from duckielib.sim.noise import NoiseProfile
+from duckielib.sim.noise import REALISTIC_SPEED_CURVE, REALISTIC_TURNING_RESISTANCE, NoiseProfile
 from duckielib.sim.replay import ReplayReport, aligned_encoders, replay_bag, wheel_commands
+from duckielib.sim.wheels import CommandSteps, command_steps, counted_angles
 
 __all__ = [
     "CALIBRATION_DRIVE",
@@ -42,6 +47,7 @@ __all__ = [
     "calibrate_bag",
     "CALIBRATION_SAMPLE_ROBOT",
     "calibration_driver",
+    "fit_profile",
     "held_commands",
     "record_calibration_drive",
     "record_calibration_sample",
@@ -50,24 +56,37 @@ __all__ = [
 
 #: The shortest command that counts as held, and the part of it measured (its second half).
 HOLD_S = 1.0
-#: Commands closer than this are the same level of the speed curve.
+#: Commands closer than this are the same level.
 LEVEL_STEP = 0.02
-#: How many different moving levels each wheel needs for a fit.
-LEVELS_NEEDED = 3
-#: A wheel slower than this (rad/s) over a held command did not turn.
-STILL = 0.1
 #: The last part of a held command left out of its measure, in seconds: encoders that count by
 #: the command's sign count the next command's way as soon as it comes.
 EDGE_S = 0.1
 #: The speed the fitted kinematics gain makes right, m/s (the course's driving speed).
 GAIN_SPEED = 0.2
-#: The largest turning resistance tried (s/rad).
-TURNING_MAX = 3.0
-_WHAT_TO_RECORD = (
-    f"Record at least {LEVELS_NEEDED} different wheel commands on both wheels, each held for "
-    "1 s or more (for example 0.2, 0.35 and 0.5), then arcs mixing them (0.2 on one wheel, "
-    "0.5 on the other), and calibrate again."
-)
+#: How long after the last command the wheels are still compared (they coast to a stop).
+COAST_S = 1.0
+#: The windows whose ticks are compared, in seconds.
+WINDOW_S = 1.0
+#: A wheel counts as driven by a command of at least this duty cycle.
+DRIVEN_DUTY = 0.02
+#: The shares of the driven time below which the speed curve's knots lie (the duties the
+#: bag's commands spent most time at), and the smallest gap between two knots.
+KNOT_SHARES = (0.03, 0.25, 0.5, 0.75, 0.97)
+KNOT_GAP = 0.04
+#: The least driving a bag needs, in seconds with a wheel commanded and turning.
+DRIVING_NEEDED_S = 1.0
+#: The realistic profile's values, where a fit starts and where the bag says nothing:
+#: (value, spread). A parameter the bag cannot see stays at its realistic value.
+_PRIOR_DEAD_BAND = (0.12, 0.1)
+_PRIOR_RIGHT_GAIN = (1.0, 0.2)
+#: The right motor's gains the fit starts from, keeping the best fit.
+_RIGHT_GAIN_STARTS = (0.85, 1.0, 1.15)
+_PRIOR_TURNING = (REALISTIC_TURNING_RESISTANCE, 1.5)
+_PRIOR_SPEED_SPREAD = 0.5  # of the realistic speed at a knot
+#: The prior's weight against the bag's windows (each window one residual per wheel).
+_PRIOR_WEIGHT = 0.3
+#: The weight of the turn's drift (right minus left, accumulated) against the wheels' ticks.
+_TURN_WEIGHT = 1.0
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -88,38 +107,59 @@ Curve = Tuple[Tuple[float, float], ...]
 
 @dataclass(frozen=True)
 class Calibration:
-    """A fitted profile, what it was fitted on, and how well it replays the bag.
+    """A fitted profile, what it was fitted on, and how well it replays bags of the robot.
 
     Attributes:
         profile: the fitted noise profile (save it with ``profile.save("robot.json")``).
-        points: each wheel's measured ``(|duty|, rad/s)`` pairs, one per held command.
-        replay: the bag replayed into the fitted profile.
-        arcs: how many held commands were arcs (they fit the turning resistance).
+        replays: the bags it was fitted on, replayed into the fitted profile by the simulator.
+        checks: other bags of the robot (``--check``), replayed into the fitted profile.
+        driven: the duties the fit saw, as ``(lowest, highest)`` commanded magnitude;
+            beyond them the speed curve follows the realistic curve's shape.
+        notes: what the bag could not say, and what was done about it.
     """
 
     profile: NoiseProfile
-    points: Dict[str, List[Tuple[float, float]]]
-    replay: ReplayReport
-    arcs: int = 0
+    replays: Tuple[ReplayReport, ...]
+    checks: Tuple[ReplayReport, ...] = ()
+    driven: Tuple[float, float] = (0.0, 1.0)
+    notes: Tuple[str, ...] = ()
+
+    @property
+    def replay(self) -> ReplayReport:
+        """The first bag it was fitted on, replayed into the fitted profile."""
+        return self.replays[0]
 
     def figures(self) -> Dict[str, Union[str, int, float]]:
         """The fit as ``name: value`` pairs (what ``duckie calibrate`` prints)."""
         figures: Dict[str, Union[str, int, float]] = {"bag": self.replay.bag}
         curve = self.profile.speed_curve or ()
+        curves = {"left": curve, "right": self.profile.right_speed_curve or curve}
         gains = {"left": self.profile.left_gain, "right": self.profile.right_gain}
         figures["calibration_dead_band"] = round(curve[0][0], 4) if curve else 0.0
+        figures["calibration_driven_duties"] = f"{self.driven[0]:.2f} to {self.driven[1]:.2f}"
         for wheel in ("left", "right"):
-            figures[f"calibration_held_commands_{wheel}"] = len(self.points[wheel])
             for duty in (0.3, 0.5, 1.0):
-                speed = gains[wheel] * _speed_on(curve, duty)
+                speed = gains[wheel] * _speed_on(curves[wheel], duty)
                 figures[f"calibration_speed_at_{duty:g}_{wheel}"] = round(speed, 3)
         figures["calibration_right_gain"] = self.profile.right_gain
-        figures["calibration_kinematics_gain"] = self.profile.kinematics_gain
-        figures["calibration_held_arcs"] = self.arcs
         figures["calibration_turning_resistance"] = self.profile.turning_resistance
-        figures["calibration_tick_rate_rms"] = round(self.replay.tick_rate_rms, 3)
-        figures["calibration_travel_ratio_left"] = round(self.replay.left.travel_ratio, 4)
-        figures["calibration_travel_ratio_right"] = round(self.replay.right.travel_ratio, 4)
+        figures["calibration_kinematics_gain"] = self.profile.kinematics_gain
+        named = [("calibration", report) for report in self.replays[:1]]
+        named += [
+            (f"calibration_{index}", report) for index, report in enumerate(self.replays[1:], 2)
+        ]
+        named += [(f"check_{index}", check) for index, check in enumerate(self.checks, 1)]
+        for prefix, report in named:
+            if prefix != "calibration":
+                figures[f"{prefix}_bag"] = report.bag
+            figures[f"{prefix}_travel_ratio_left"] = round(report.left.travel_ratio, 4)
+            figures[f"{prefix}_travel_ratio_right"] = round(report.right.travel_ratio, 4)
+            figures[f"{prefix}_turn_ratio"] = round(report.turn_ratio, 4)
+            figures[f"{prefix}_tick_rate_rms"] = round(report.tick_rate_rms, 3)
+            if report.paths is not None:
+                paths = report.paths.figures()
+                figures[f"{prefix}_heading_ratio"] = paths["heading_ratio"]
+                figures[f"{prefix}_final_gap_m"] = paths["final_gap_m"]
         return figures
 
 
@@ -159,7 +199,11 @@ def held_commands(
     left_topic: Optional[str] = None,
     right_topic: Optional[str] = None,
 ) -> List[Held]:
-    """Every command held 1 s or more but stops, with both wheels' speeds (module doc)."""
+    """Every command held 1 s or more but stops, with both wheels' speeds over its second half.
+
+    What a bag of held commands says directly; a closed-loop bag (a controller that changes
+    its command many times a second) has none, and :func:`calibrate_bag` needs none.
+    """
     bag = bag if isinstance(bag, Bag) else Bag(bag)
     commands = wheel_commands(bag, command_topic)
     streams, _ = aligned_encoders(bag, left_topic, right_topic)  # on the commands' clock
@@ -199,18 +243,13 @@ def steady_speeds(
     left_topic: Optional[str] = None,
     right_topic: Optional[str] = None,
 ) -> Dict[str, List[Tuple[float, float]]]:
-    """Each wheel's ``(|duty|, rad/s)`` for every command held 1 s or more (module doc).
+    """Each wheel's ``(|duty|, rad/s)`` for every command held 1 s or more.
 
     The speed is measured over the command's second half, along the command's direction
     (a wheel that turned the other way has a negative speed).
     """
-    return _points(held_commands(bag, command_topic, left_topic, right_topic))
-
-
-def _points(held: List[Held]) -> Dict[str, List[Tuple[float, float]]]:
-    """Each wheel's ``(|duty|, rad/s)`` from held commands, along each wheel's command."""
     points: Dict[str, List[Tuple[float, float]]] = {"left": [], "right": []}
-    for command in held:
+    for command in held_commands(bag, command_topic, left_topic, right_topic):
         for wheel, duty, speed in (
             ("left", command.left_duty, command.left_speed),
             ("right", command.right_duty, command.right_speed),
@@ -220,119 +259,179 @@ def _points(held: List[Held]) -> Dict[str, List[Tuple[float, float]]]:
     return points
 
 
-def _curve_points(held: List[Held], right_gain: float, turning: float) -> List[Tuple[float, float]]:
-    """The left motor's ``(|duty|, rad/s)`` alone, from the commands that drive straight.
+@dataclass(frozen=True)
+class _Run:
+    """One bag, ready to be replayed by :func:`~duckielib.sim.wheels.counted_angles`.
 
-    A straight command gives its mean speed, a turn in place half its wheels' difference
-    before the ground's resistance; the right motor is ``right_gain`` times the left one.
+    Times are in seconds from the bag's first command; angles in radians from each wheel's
+    first reading.
     """
-    points = []
-    scale = 2.0 / (1.0 + right_gain)
-    for command in held:
-        mean = 0.5 * (command.left_speed + command.right_speed)
-        if abs(command.left_duty - command.right_duty) < LEVEL_STEP:
-            sign = math.copysign(1.0, command.right_duty)
-            points.append((abs(command.right_duty), scale * sign * mean))
-        elif abs(command.left_duty + command.right_duty) < LEVEL_STEP:
-            half_difference = 0.5 * (command.right_speed - command.left_speed)
-            free = half_difference * (1.0 + turning * abs(mean))
-            sign = math.copysign(1.0, command.right_duty)
-            points.append((abs(command.right_duty), scale * sign * free))
-    return points
+
+    name: str
+    steps: CommandSteps
+    t: Tuple[np.ndarray, np.ndarray]
+    angles: Tuple[np.ndarray, np.ndarray]
+    edges: np.ndarray
+
+    def duties(self) -> np.ndarray:
+        """Every driven step's commanded magnitude, both wheels."""
+        both = np.abs(np.concatenate([self.steps.left, self.steps.right]))
+        return both[both >= DRIVEN_DUTY]
 
 
-def _predicted(
-    command: Held, curve: Curve, right_gain: float, turning: float
-) -> Tuple[float, float]:
-    """The wheels' steady speeds (rad/s, forward) the fitted model gives for a command."""
-    from duckielib.sim.robot import loaded_speeds
+def _run_of(
+    bag: Bag,
+    command_topic: Optional[str],
+    left_topic: Optional[str],
+    right_topic: Optional[str],
+) -> Tuple[_Run, Optional[str]]:
+    """The bag's commands and readings on one clock (and the note if its clocks differed)."""
+    commands = wheel_commands(bag, command_topic)
+    streams, skew = aligned_encoders(bag, left_topic, right_topic)
+    resolution = encoder_resolution(bag, *streams)
+    start = float(commands.t[0])
+    end = min(float(commands.t[-1]) + COAST_S, *(float(stream.t[-1]) for stream in streams))
+    t, angles = [], []
+    for stream in streams:
+        keep = (stream.t >= start) & (stream.t <= end)
+        if np.count_nonzero(keep) < 2:
+            raise BagError(
+                f"{bag.path.name} has fewer than two encoder readings of a wheel while its "
+                "wheel commands run, so nothing says how far the commands turned the wheels. "
+                "Record the encoders and the commands at the same time."
+            )
+        t.append(stream.t[keep] - start)
+        ticks = stream.ticks[keep].astype(float)
+        angles.append((ticks - ticks[0]) * math.tau / resolution)
+    steps = command_steps(commands.t - start, commands.left, commands.right, end - start)
+    first = max(float(t[0][0]), float(t[1][0]))
+    last = min(float(t[0][-1]), float(t[1][-1]))
+    edges = np.arange(first, last + 1e-9, WINDOW_S)
+    if len(edges) < 2:
+        edges = np.array([first, last])
+    run = _Run(bag.path.name, steps, (t[0], t[1]), (angles[0], angles[1]), edges)
+    return run, skew
 
-    left = math.copysign(_speed_on(curve, abs(command.left_duty)), command.left_duty)
-    right = math.copysign(
-        right_gain * _speed_on(curve, abs(command.right_duty)), command.right_duty
+
+def _drifts(run: _Run, profile: NoiseProfile) -> Tuple[np.ndarray, np.ndarray]:
+    """Each wheel's simulated minus real counted angle at the run's window edges (radians)."""
+    counted = counted_angles(run.steps, profile)
+    drifts = []
+    for t, real, angle in zip(run.t, run.angles, counted):
+        simulated = np.interp(t, run.steps.times, angle)
+        drifts.append(np.interp(run.edges, t, simulated - simulated[0] - real))
+    return drifts[0], drifts[1]
+
+
+@dataclass(frozen=True)
+class _Model:
+    """The fitted parameters, as one vector.
+
+    The dead band, the speed at each knot, the right motor's gain on that curve and the
+    ground's resistance to turning.
+    """
+
+    knots: Tuple[float, ...]
+
+    def start(self) -> np.ndarray:
+        speeds = [max(_speed_on(REALISTIC_SPEED_CURVE, duty), 0.1) for duty in self.knots]
+        dead_band = min(_PRIOR_DEAD_BAND[0], self.knots[0] - 0.02)
+        return np.array([dead_band, *speeds, 1.0, _PRIOR_TURNING[0]])
+
+    def bounds(self) -> Tuple[np.ndarray, np.ndarray]:
+        count = len(self.knots)
+        low = [0.0] + [0.0] * count + [0.5, 0.0]
+        high = [max(0.001, self.knots[0] - 0.01)] + [40.0] * count + [1.5, 10.0]
+        return np.array(low), np.array(high)
+
+    def curve(self, vector: np.ndarray) -> Curve:
+        """The speed curve: the dead band, the knots, then the realistic curve's shape to 1."""
+        speeds = vector[1 : 1 + len(self.knots)]
+        knots = [(float(vector[0]), 0.0), *zip(self.knots, speeds.tolist())]
+        last_duty, last_speed = knots[-1]
+        shape = _speed_on(REALISTIC_SPEED_CURVE, last_duty)
+        for duty, speed in REALISTIC_SPEED_CURVE:
+            if duty > last_duty + 1e-9 and shape > 0:
+                knots.append((duty, last_speed * speed / shape))
+        if knots[-1][0] < 1.0:
+            knots.append((1.0, knots[-1][1]))
+        if all(speed <= 0 for _, speed in knots):
+            knots[-1] = (knots[-1][0], 1e-3)
+        return tuple((round(duty, 5), round(max(speed, 0.0), 5)) for duty, speed in knots)
+
+    def profile(self, vector: np.ndarray, name: str = "calibrated") -> NoiseProfile:
+        return NoiseProfile.realistic(
+            name=name,
+            left_gain=1.0,
+            right_gain=round(float(vector[-2]), 4),
+            breakaway_pwm=None,
+            speed_curve=self.curve(vector),
+            right_speed_curve=None,
+            turning_resistance=round(float(vector[-1]), 4),
+        )
+
+    def prior(self, vector: np.ndarray) -> np.ndarray:
+        """How far the parameters are from the realistic ones, in their spreads."""
+        realistic = np.array([_speed_on(REALISTIC_SPEED_CURVE, duty) for duty in self.knots])
+        spread = np.maximum(_PRIOR_SPEED_SPREAD * realistic, 0.5)
+        speeds = vector[1 : 1 + len(self.knots)]
+        return np.concatenate(
+            [
+                [(vector[0] - _PRIOR_DEAD_BAND[0]) / _PRIOR_DEAD_BAND[1]],
+                (speeds - realistic) / spread,
+                [(vector[-2] - _PRIOR_RIGHT_GAIN[0]) / _PRIOR_RIGHT_GAIN[1]],
+                [(vector[-1] - _PRIOR_TURNING[0]) / _PRIOR_TURNING[1]],
+            ]
+        )
+
+
+def _knots(duties: np.ndarray) -> Tuple[float, ...]:
+    """The speed curve's fitted knots: where the bag's commands spent their time (module doc)."""
+    knots: List[float] = []
+    for share in np.quantile(duties, KNOT_SHARES):
+        duty = round(float(min(share, 1.0)), 3)
+        if not knots or duty - knots[-1] >= KNOT_GAP:
+            knots.append(duty)
+    if len(knots) > 1 and knots[0] < 0.03:
+        knots = knots[1:]
+    return tuple(max(duty, 0.03) for duty in knots)
+
+
+def _residuals(runs: Sequence[_Run], model: _Model, vector: np.ndarray) -> np.ndarray:
+    """What the fit makes small.
+
+    Each window's tick error per wheel, the drift of each wheel and of the turn (each bag
+    weighing by its length), and the parameters' distance from the realistic ones.
+    """
+    profile = model.profile(vector)
+    parts = []
+    for run in runs:
+        left, right = _drifts(run, profile)
+        spread = math.sqrt(max(1, len(run.edges) - 1))
+        parts += [
+            np.diff(left),
+            np.diff(right),
+            left / spread,
+            right / spread,
+            _TURN_WEIGHT * (right - left) / spread,
+        ]
+    parts.append(_PRIOR_WEIGHT * model.prior(vector))
+    return np.concatenate(parts)
+
+
+def _driving_seconds(run: _Run) -> float:
+    """How long a wheel was commanded and turned, in seconds."""
+    turned = 0.0
+    for t, angle in zip(run.t, run.angles):
+        rates = np.abs(np.diff(angle)) > 0
+        turned = max(turned, float(np.sum(np.diff(t)[rates])))
+    commanded = float(
+        np.count_nonzero(
+            (np.abs(run.steps.left) >= DRIVEN_DUTY) | (np.abs(run.steps.right) >= DRIVEN_DUTY)
+        )
+        * run.steps.dt
     )
-    return loaded_speeds(left, right, turning)
-
-
-def _fit_model(held: List[Held], bag: str) -> Tuple[Curve, float, float]:
-    """The motors' speed curve, the right motor's gain and the turning resistance.
-
-    They are the ones that together best predict every held command's wheel speeds (least
-    squares, searched on a coarse grid and then around its best point).
-    """
-    moving = [
-        command for command in held if not command.arc and (command.left_duty or command.right_duty)
-    ]
-    first_points = _curve_points(moving, 1.0, 0.0)
-    if not first_points:
-        raise BagError(
-            f"{bag} holds no command that drives both wheels straight or turns in place, held "
-            "1 s or more. " + _WHAT_TO_RECORD
-        )
-    _fit_curve(first_points, bag)  # a sentence if too few levels
-
-    def error(right_gain: float, turning: float) -> Tuple[float, Curve]:
-        curve = _fit_curve(_curve_points(moving, right_gain, turning), bag)
-        total = 0.0
-        for command in held:
-            left, right = _predicted(command, curve, right_gain, turning)
-            total += (left - command.left_speed) ** 2 + (right - command.right_speed) ** 2
-        return total, curve
-
-    turnings = [step * 0.05 for step in range(round(TURNING_MAX / 0.05) + 1)]
-    if all(abs(command.left_duty - command.right_duty) < LEVEL_STEP for command in held):
-        turnings = [0.0]  # only straight runs: the ground's resistance to turns is not seen
-    best = (math.inf, 1.0, 0.0)
-    for gain_step in range(-30, 31):
-        for turning in turnings:
-            total, _ = error(1.0 + gain_step * 0.01, turning)
-            if total < best[0] - 1e-12:
-                best = (total, 1.0 + gain_step * 0.01, turning)
-    _, gain, turning = best
-    span_gain, span_turning = 0.01, 0.05 if len(turnings) > 1 else 0.0
-    for _ in range(2):  # refine: a finer grid around the best point, twice
-        for gain_step in range(-10, 11):
-            for turning_step in range(-10, 11):
-                candidate_gain = gain + gain_step * span_gain / 10
-                candidate_turning = max(0.0, turning + turning_step * span_turning / 10)
-                total, _ = error(candidate_gain, candidate_turning)
-                if total < best[0] - 1e-12:
-                    best = (total, candidate_gain, candidate_turning)
-        _, gain, turning = best
-        span_gain, span_turning = span_gain / 10, span_turning / 10
-    _, curve = error(gain, turning)
-    return curve, round(gain, 4), round(turning, 4)
-
-
-def _fit_curve(points: List[Tuple[float, float]], bag: str) -> Curve:
-    """A motor's speed curve through its measured points (module doc)."""
-    levels: Dict[float, List[float]] = {}
-    for duty, speed in sorted(points):
-        key = next((level for level in levels if abs(level - duty) < LEVEL_STEP), duty)
-        levels.setdefault(key, []).append(speed)
-    means = sorted((duty, float(np.mean(speeds))) for duty, speeds in levels.items())
-    moving = [(duty, speed) for duty, speed in means if speed > STILL]
-    still = [duty for duty, speed in means if speed <= STILL]
-    if len(moving) < LEVELS_NEEDED:
-        held = ", ".join(f"{duty:.2f}" for duty, _ in means) or "none"
-        raise BagError(
-            f"{bag} holds too few different commands that drive straight or turn in place and "
-            f"turn the wheels, each held 1 s or more, to fit the motors (found {len(moving)}; "
-            f"commands held: {held}). " + _WHAT_TO_RECORD
-        )
-    (d0, s0), (d1, s1) = moving[0], moving[1]
-    slope = (s1 - s0) / (d1 - d0) if d1 > d0 else 0.0
-    dead_band = d0 - s0 / slope if slope > 0 else d0 * 0.5
-    lowest = max(still, default=0.0)
-    dead_band = min(max(dead_band, lowest, 0.005), d0 - 1e-3)
-    knots = [(dead_band, 0.0)]
-    for duty, speed in moving:
-        knots.append((duty, max(speed, knots[-1][1])))  # a faster command never turns slower
-    if knots[-1][0] < 1.0:
-        (da, sa), (db, sb) = knots[-2], knots[-1]
-        end_slope = max((sb - sa) / (db - da), 0.0) if db > da else 0.0
-        knots.append((1.0, sb + end_slope * (1.0 - db)))
-    return tuple((round(duty, 4), round(speed, 4)) for duty, speed in knots)
+    return min(turned, commanded)
 
 
 def _kinematics_gain(profile: NoiseProfile) -> float:
@@ -361,41 +460,104 @@ def _kinematics_gain(profile: NoiseProfile) -> float:
     return round(max(0.1, high * DB21.k / asked), 3)
 
 
-def calibrate_bag(
-    bag: Union[Bag, PathLike],
+def fit_profile(
+    bags: Union[Bag, PathLike, Sequence[Union[Bag, PathLike]]],
     name: str = "calibrated",
     command_topic: Optional[str] = None,
     left_topic: Optional[str] = None,
     right_topic: Optional[str] = None,
+) -> Tuple[NoiseProfile, Tuple[float, float], Tuple[str, ...]]:
+    """The profile that best replays a bag's whole command sequence (module doc).
+
+    Several bags of one robot are fitted together.
+
+    Returns:
+        The profile, the duties the fit saw (lowest, highest) and notes on what the bags
+        could not say.
+
+    Raises:
+        BagError: if a bag lacks the commands or the encoders, or never drives a wheel.
+    """
+    many: List[Any] = list(bags) if isinstance(bags, (list, tuple)) else [bags]
+    runs, notes = [], []
+    for item in many:
+        bag = item if isinstance(item, Bag) else Bag(item)
+        run, skew = _run_of(bag, command_topic, left_topic, right_topic)
+        notes += [] if skew is None else [skew]
+        driving = _driving_seconds(run)
+        if driving < DRIVING_NEEDED_S:
+            raise BagError(
+                f"{bag.path.name} drives the wheels for {driving:.1f} s only (a wheel commanded "
+                "and turning), too little to say how the motors answer their commands: record "
+                f"{DRIVING_NEEDED_S:g} s or more of driving (any driving, your mission included) "
+                "with the wheel commands and both encoders, and calibrate again."
+            )
+        runs.append(run)
+    duties = np.concatenate([run.duties() for run in runs])
+    model = _Model(_knots(duties))
+    fit = None
+    for right_gain in _RIGHT_GAIN_STARTS:  # the fit has a valley for each way the robot pulls
+        start = model.start()
+        start[-2] = right_gain
+        tried = least_squares(
+            lambda vector: _residuals(runs, model, vector),
+            start,
+            bounds=model.bounds(),
+            x_scale="jac",
+            diff_step=1e-3,
+        )
+        if fit is None or tried.cost < fit.cost:
+            fit = tried
+    assert fit is not None  # _RIGHT_GAIN_STARTS is not empty
+    driven = (float(np.quantile(duties, 0.02)), float(np.quantile(duties, 0.98)))
+    differs = max(float(np.max(np.abs(run.steps.left - run.steps.right))) for run in runs)
+    if differs < LEVEL_STEP:
+        notes.append(
+            "The wheels are never driven at different commands, so nothing says how the "
+            "ground resists turning: the realistic robot's value is kept."
+        )
+    profile = model.profile(fit.x, name)
+    profile = profile.replace(name=name, kinematics_gain=_kinematics_gain(profile))
+    return profile, driven, tuple(notes)
+
+
+def calibrate_bag(
+    bag: Union[Bag, PathLike, Sequence[Union[Bag, PathLike]]],
+    name: str = "calibrated",
+    command_topic: Optional[str] = None,
+    left_topic: Optional[str] = None,
+    right_topic: Optional[str] = None,
+    check: Sequence[Union[Bag, PathLike]] = (),
+    solution: Any = None,
 ) -> Calibration:
-    """Fit each motor's speed curve to a bag and check the fit by replaying it (module doc).
+    """Fit the motors and the ground to a bag and replay it, and other bags, into the fit.
 
     Args:
         bag: a :class:`~duckielib.bags.Bag` or a bag's path, with the wheel commands
-            (``wheels_driver_node/wheels_cmd``) and both encoders' ticks.
+            (``wheels_driver_node/wheels_cmd``) and both encoders' ticks; or several bags of
+            one robot, fitted together. Any driving will do: a mission, lane following, held
+            commands.
         name: the fitted profile's name.
         command_topic: the wheel commands' topic (default: found by type and name).
         left_topic: the left encoder's topic (default: found by name).
         right_topic: the right encoder's topic (default: found by name).
+        check: other bags of the same robot, replayed into the fitted profile to see how
+            well it predicts runs it was not fitted on.
+        solution: what holds the odometry (``delta_phi``, ``estimate_pose``,
+            ``WheelPairing``): with it, each replay also compares the headings and paths.
 
     Raises:
-        BagError: if the bag lacks the topics, or holds too few different held commands.
+        BagError: if a bag lacks the topics, or the bags to fit never drive the wheels.
     """
-    bag = bag if isinstance(bag, Bag) else Bag(bag)
-    held = held_commands(bag, command_topic, left_topic, right_topic)
-    curve, right_gain, turning = _fit_model(held, bag.path.name)
-    profile = NoiseProfile.realistic(
-        name=name,
-        left_gain=1.0,
-        right_gain=right_gain,
-        breakaway_pwm=None,
-        speed_curve=curve,
-        turning_resistance=turning,
+    bags: List[Any] = list(bag) if isinstance(bag, (list, tuple)) else [bag]
+    opened = [item if isinstance(item, Bag) else Bag(item) for item in bags]
+    profile, driven, notes = fit_profile(opened, name, command_topic, left_topic, right_topic)
+    replays = tuple(
+        replay_bag(item, profile, 0, command_topic, left_topic, right_topic, solution)
+        for item in opened
     )
-    profile = profile.replace(name=name, kinematics_gain=_kinematics_gain(profile))
-    replay = replay_bag(bag, profile, 0, command_topic, left_topic, right_topic)
-    arcs = sum(command.arc for command in held)
-    return Calibration(profile, _points(held), replay, arcs)
+    checks = tuple(replay_bag(other, profile, 0, solution=solution) for other in check)
+    return Calibration(profile, replays, checks, driven, notes)
 
 
 def calibration_driver(drive: Sequence[Tuple[float, float, float]] = CALIBRATION_DRIVE) -> None:

@@ -172,6 +172,22 @@ class ReplayReport:
     paths: Optional[Paths] = None
     notes: Tuple[str, ...] = ()
 
+    def turn(self, which: str) -> int:
+        """How far the robot turned in ticks: the right wheel's net ticks minus the left's.
+
+        Odometry's heading change is proportional to it, so ``turn_ratio`` is the simulated
+        heading change over the real one, whatever odometry computes it.
+        ``which``: ``"real"`` or ``"sim"``.
+        """
+        left, right = self.real_ticks if which == "real" else self.sim_ticks
+        return int(right[-1] - right[0]) - int(left[-1] - left[0])
+
+    @property
+    def turn_ratio(self) -> float:
+        """The simulated turn over the real one (NaN if the real robot did not turn)."""
+        real = self.turn("real")
+        return self.turn("sim") / real if real else math.nan
+
     def figures(self) -> Dict[str, Union[str, int, float]]:
         """The report as ``name: value`` pairs (what ``duckie sim replay`` prints)."""
         figures: Dict[str, Union[str, int, float]] = {
@@ -187,6 +203,9 @@ class ReplayReport:
             figures[f"travel_ratio_{side.wheel}"] = round(side.travel_ratio, 4)
             figures[f"tick_rate_rms_{side.wheel}"] = round(side.tick_rate_rms, 3)
         figures["tick_rate_rms"] = round(self.tick_rate_rms, 3)
+        figures["turn_ticks_real"] = self.turn("real")
+        figures["turn_ticks_sim"] = self.turn("sim")
+        figures["turn_ratio"] = round(self.turn_ratio, 4)
         if self.paths is not None:
             figures.update(self.paths.figures())
         return figures

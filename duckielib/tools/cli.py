@@ -365,10 +365,27 @@ def _add_simulator(commands: argparse._SubParsersAction) -> None:
         help="fit the simulated motors to your robot, from a bag of its wheel commands and ticks",
     )
     calibrate.add_argument(
-        "bag", help="a bag with wheels_driver_node/wheels_cmd and both encoders' ticks"
+        "bag",
+        nargs="+",
+        help="a bag with wheels_driver_node/wheels_cmd and both encoders' ticks (any driving: "
+        "your mission, lane following, held commands); several bags of one robot fit together",
     )
     calibrate.add_argument("-o", "--out", help="write the fitted profile to this file (.json)")
     calibrate.add_argument("--name", help="the profile's name (default: the file's name)")
+    calibrate.add_argument(
+        "--check",
+        nargs="+",
+        default=[],
+        metavar="OTHER",
+        help="other bags of the same robot: replay them into the fitted profile to see how "
+        "well it predicts runs it was not fitted on",
+    )
+    calibrate.add_argument(
+        "--solution",
+        help="the odometry that turns ticks into headings and paths, to compare them too: "
+        "your notebooks' folder (course) or a file made by duckie export (default: the "
+        "reference, where there is one)",
+    )
     _add_replay_topics(calibrate)
     calibrate.add_argument("--json", action="store_true", help="print the figures as JSON")
     calibrate.set_defaults(handler=_calibrate)
@@ -435,8 +452,13 @@ def _calibrate(args: argparse.Namespace) -> int:
     from duckielib.sim.calibrate import calibrate_bag
 
     name = args.name or (Path(args.out).stem if args.out else "calibrated")
-    calibration = calibrate_bag(args.bag, name, args.commands, args.left, args.right)
+    solution = _odometry_solution(args.solution)
+    calibration = calibrate_bag(
+        args.bag, name, args.commands, args.left, args.right, args.check, solution
+    )
     _print_figures(calibration.figures(), args.json)
+    for note in calibration.notes:
+        print(f"note: {note}", file=sys.stderr)
     if args.out:
         path = calibration.profile.save(args.out)
         if not args.json:

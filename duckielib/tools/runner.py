@@ -49,6 +49,7 @@ from duckielib.solution import (
 
 if TYPE_CHECKING:  # the bag's analysis is imported where a run is read, not by the nodes
     from duckielib.bags.behaviour import MissionReport
+    from duckielib.sim.noise import NoiseProfile
 
 __all__ = [
     "MissionError",
@@ -65,6 +66,12 @@ __all__ = [
     "trajectory_figure",
     "write_animation",
 ]
+
+
+def noise_name(noise: Union[str, NoiseProfile]) -> str:
+    """The name a run's summary and title give its noise profile."""
+    return noise if isinstance(noise, str) else noise.name
+
 
 #: The files a run writes in its folder.
 OUTPUTS = ("mission.bag", "trajectory.png", "mission.gif", "summary.json", "log.txt")
@@ -267,7 +274,7 @@ def _unused_name(folder: Path, pattern: str) -> Path:
 def run_mission(
     solution: Any = None,
     mission: Union[str, Mission] = "square_then_circle",
-    noise: str = "ideal",
+    noise: Union[str, NoiseProfile] = "ideal",
     seed: int = 0,
     out: Union[str, os.PathLike] = "runs/latest",
     stop_color: Optional[str] = None,
@@ -284,7 +291,8 @@ def run_mission(
             notebook's ``globals()``.
         mission: a :class:`~duckielib.missions.Mission` or its name (``"square_then_circle"``,
             ``"d_shape"``).
-        noise: the simulator's noise profile, ``"ideal"`` or ``"realistic"``.
+        noise: the simulator's noise profile: ``"ideal"``, ``"realistic"``, a profile file
+            (``duckie calibrate`` writes one) or a :class:`~duckielib.sim.NoiseProfile`.
         seed: the simulator's seed (same seed and solution, same run).
         out: the folder to write the files to (created if needed; earlier files replaced,
             but a recording cut off by a killed run is kept as ``unfinished-N.bag.active``,
@@ -341,7 +349,7 @@ def run_files(folder: Path) -> Dict[str, Path]:
 
 
 def finish_run(
-    run: Tuple[Mission, str, str, int, str, Dict[str, Path], float, float],
+    run: Tuple[Mission, str, Union[str, NoiseProfile], int, str, Dict[str, Path], float, float],
     failure: Optional[DuckielibError],
     animation: bool = True,
     figure: bool = True,
@@ -374,7 +382,7 @@ def finish_run(
 def _write_run(
     chosen: Mission,
     namespace: str,
-    noise: str,
+    noise: Union[str, NoiseProfile],
     seed: int,
     label: str,
     files: Dict[str, Path],
@@ -396,7 +404,7 @@ def _write_run(
     summary.update(
         {
             "robot": namespace.strip("/"),
-            "noise": noise,
+            "noise": noise_name(noise),
             "seed": seed,
             "solution": label.replace("the ", ""),
             "simulated_s": round(simulated, 3),
@@ -419,7 +427,7 @@ def _write_run(
 def drive_and_record(
     parts: Any,
     chosen: Mission,
-    noise: str,
+    noise: Union[str, NoiseProfile],
     seed: int,
     files: Dict[str, Path],
     time_limit: float,
@@ -596,9 +604,11 @@ def trajectory_figure(tracks: List[Any], report: MissionReport, path: Path) -> P
     return plots.save_figure(figure, path)
 
 
-def _animation(bag: Path, chosen: Mission, label: str, noise: str, path: Path) -> Path:
+def _animation(
+    bag: Path, chosen: Mission, label: str, noise: Union[str, NoiseProfile], path: Path
+) -> Path:
     """``mission.gif``: the run played back in about 12 s."""
-    title = f"{chosen.name}: {label.replace('the ', '')} solution, {noise} robot"
+    title = f"{chosen.name}: {label.replace('the ', '')} solution, {noise_name(noise)} robot"
     return write_animation(bag, title, path)
 
 

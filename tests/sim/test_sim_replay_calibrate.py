@@ -92,39 +92,78 @@ def test_a_mission_bag_replays_into_its_own_profile_tick_for_tick(tmp_path):
     assert set(figures) >= {"travel_ratio_left", "travel_ratio_right", "tick_rate_rms"}
 
 
-def test_a_bag_of_an_unusual_robot_calibrates_back_to_it_within_5_percent(tmp_path):
+def _speeds(profile, duty):
+    """A profile's steady (left, right) wheel speeds for a duty, before the ground's drag."""
+    right_curve = profile.right_speed_curve or profile.speed_curve
+    return (
+        profile.left_gain * steady_speed(profile.speed_curve, duty),
+        profile.right_gain * steady_speed(right_curve, duty),
+    )
+
+
+def assert_calibrated_back(fitted, duties):
+    for duty in duties:
+        for wheel, got, true in zip(
+            ("left", "right"), _speeds(fitted, duty), _speeds(UNUSUAL, duty)
+        ):
+            assert got == pytest.approx(true, rel=0.05), (duty, wheel)
+    assert fitted.turning_resistance == pytest.approx(TRUE_TURNING, rel=0.05)
+
+
+def test_a_bag_of_held_commands_calibrates_an_unusual_robot_back_within_5_percent(tmp_path):
     bag = record_drive(tmp_path / "unusual.bag", UNUSUAL)
     points = steady_speeds(bag)
     assert len(points["left"]) == len(points["right"]) == 7  # every held command but stops
     calibration = calibrate_bag(bag, name="ente")
     fitted = calibration.profile
     assert fitted.name == "ente"
-    curve = fitted.speed_curve
-    assert curve[0][0] == pytest.approx(0.18, rel=0.05)  # the dead band
-    for duty in (0.3, 0.4, 0.5, 0.6, 0.8):
-        assert steady_speed(curve, duty) == pytest.approx(
-            steady_speed(TRUE_CURVE, duty), rel=0.05
-        ), duty
-    assert fitted.right_gain == pytest.approx(0.85, rel=0.05)
-    assert fitted.turning_resistance == pytest.approx(TRUE_TURNING, rel=0.05)
+    assert_calibrated_back(fitted, (0.3, 0.4, 0.5, 0.6, 0.8))
     figures = calibration.figures()
-    assert figures["calibration_held_arcs"] == 2
-    assert figures["calibration_turning_resistance"] == fitted.turning_resistance
+    assert figures["calibration_right_gain"] == fitted.right_gain
     assert figures["calibration_tick_rate_rms"] < 3.0
-    assert figures["calibration_travel_ratio_left"] == pytest.approx(1.0, abs=0.05)
-    assert figures["calibration_travel_ratio_right"] == pytest.approx(1.0, abs=0.05)
+    assert figures["calibration_travel_ratio_left"] == pytest.approx(1.0, abs=0.02)
+    assert figures["calibration_travel_ratio_right"] == pytest.approx(1.0, abs=0.02)
+    assert figures["calibration_turn_ratio"] == pytest.approx(1.0, abs=0.05)
     # The default profile is far from this robot; the fitted one is close.
     before = replay_bag(bag, noise="realistic")
     assert before.tick_rate_rms > 5 * calibration.replay.tick_rate_rms
 
 
-def test_a_bag_with_one_speed_says_what_to_record(tmp_path):
+def test_an_unusual_robot_driven_closed_loop_calibrates_back_and_predicts_another_run(tmp_path):
+    # The mission's own controller drives: commands change every 50 ms, none is held 1 s.
+    run = run_mission(out=tmp_path / "square", noise=UNUSUAL, seed=4, animation=False, figure=False)
+    bag = run.folder / "mission.bag"
+    commands = Bag(bag).topics["/duckiebot/wheels_driver_node/wheels_cmd_executed"].count
+    assert commands > 5 * run.summary["total_time"]
+    calibration = calibrate_bag(bag, check=[record_drive(tmp_path / "held.bag", UNUSUAL)])
+    low, high = calibration.driven
+    assert 0.15 < low < 0.2
+    assert 0.45 < high < 0.55
+    assert_calibrated_back(calibration.profile, (0.25, 0.3, 0.4, 0.5))
+    # Checked on a run it was not fitted on (held commands up to 0.8): each wheel's travel
+    # and the turn within 5 %.
+    figures = calibration.figures()
+    assert figures["check_1_bag"] == "held.bag"
+    for name in ("check_1_travel_ratio_left", "check_1_travel_ratio_right", "check_1_turn_ratio"):
+        assert figures[name] == pytest.approx(1.0, abs=0.05), name
+
+
+def test_a_bag_with_one_speed_calibrates_and_says_what_it_could_not_see(tmp_path):
     bag = record_drive(tmp_path / "one.bag", UNUSUAL, drive=[(0.4, 0.4, 3.0), (0.0, 0.0, 1.0)])
-    with pytest.raises(BagError, match="too few different commands that drive") as caught:
-        calibrate_bag(bag)
-    assert "Record at least 3 different wheel commands on both wheels, each held for 1 s" in (
-        str(caught.value)
+    calibration = calibrate_bag(bag)
+    assert calibration.replay.left.travel_ratio == pytest.approx(1.0, abs=0.03)
+    assert _speeds(calibration.profile, 0.4)[0] == pytest.approx(_speeds(UNUSUAL, 0.4)[0], rel=0.05)
+    assert calibration.notes == (
+        "The wheels are never driven at different commands, so nothing says how the ground "
+        "resists turning: the realistic robot's value is kept.",
     )
+
+
+def test_a_bag_that_never_drives_the_wheels_is_refused_with_what_to_record(tmp_path):
+    bag = record_drive(tmp_path / "still.bag", UNUSUAL, drive=[(0.0, 0.0, 3.0), (0.1, 0.1, 2.0)])
+    with pytest.raises(BagError, match=r"drives the wheels for 0\.0 s only") as caught:
+        calibrate_bag(bag)
+    assert "any driving, your mission included" in str(caught.value)
 
 
 def test_a_bag_without_commands_says_which_topic_to_record(tmp_path):
@@ -150,7 +189,7 @@ def test_the_commands_print_name_value_lines_and_write_a_profile_duckie_mission_
     lines = dict(
         line.split(": ", 1) for line in capsys.readouterr().out.splitlines() if ": " in line
     )
-    assert float(lines["calibration_dead_band"]) == pytest.approx(0.18, rel=0.05)
+    assert float(lines["calibration_speed_at_0.5_left"]) == pytest.approx(6.0, rel=0.05)
     assert float(lines["calibration_right_gain"]) == pytest.approx(0.85, rel=0.05)
     assert float(lines["calibration_tick_rate_rms"]) < 3.0
     assert {"calibration_travel_ratio_left", "calibration_travel_ratio_right"} <= set(lines)
@@ -221,12 +260,12 @@ def test_the_calibration_drive_recorded_on_the_realistic_robot_calibrates_back_t
     calibration = calibrate_bag(bag)
     realistic = NoiseProfile.realistic()
     fitted = calibration.profile
-    assert fitted.right_gain == pytest.approx(realistic.right_gain, rel=0.01)
-    assert fitted.turning_resistance == pytest.approx(realistic.turning_resistance, rel=0.05)
-    for duty in (0.2, 0.3, 0.4, 0.5):
-        assert steady_speed(fitted.speed_curve, duty) == pytest.approx(
-            steady_speed(realistic.speed_curve, duty), rel=0.05
-        ), duty
+    # The fitted motors have no static friction (a wheel at rest starts at any command above
+    # the dead band); the realistic one has, and the fit takes part of it as the ground's.
+    assert fitted.turning_resistance == pytest.approx(realistic.turning_resistance, rel=0.15)
+    for duty in (0.3, 0.4, 0.5):
+        for got, true in zip(_speeds(fitted, duty), _speeds(realistic, duty)):
+            assert got == pytest.approx(true, rel=0.05), duty
     # The kinematics gain that makes the robot drive 0.2 m/s when asked, and it does.
     assert 1.7 < fitted.kinematics_gain < 1.9
     assert calibration.figures()["calibration_kinematics_gain"] == fitted.kinematics_gain
@@ -239,8 +278,9 @@ def test_the_sample_calibration_bag_fits_its_robot_and_the_realistic_one_does_no
     bag = sample_bag("calibration_drive")
     calibration = calibrate_bag(bag)
     assert calibration.profile.right_gain == pytest.approx(0.93, rel=0.02)
-    assert calibration.profile.turning_resistance == pytest.approx(0.9, rel=0.05)
-    assert calibration.profile.speed_curve[0][0] == pytest.approx(0.15, abs=0.01)
+    assert calibration.profile.turning_resistance == pytest.approx(0.9, rel=0.15)
+    # Its dead band: no held command below 0.15 tells where it ends, and the fit stays below.
+    assert 0.08 < calibration.profile.speed_curve[0][0] < 0.15
     assert steady_speed(calibration.profile.speed_curve, 0.4) == pytest.approx(
         steady_speed(CALIBRATION_SAMPLE_ROBOT["speed_curve"], 0.4), rel=0.03
     )
@@ -257,13 +297,15 @@ def test_without_arcs_the_straight_runs_and_turns_in_place_still_tell_the_wheels
     straight_and_in_place = [step for step in DRIVE if not (step[0] > 0 and step[0] != step[1])]
     bag = record_drive(tmp_path / "no_arcs.bag", UNUSUAL, drive=straight_and_in_place)
     calibration = calibrate_bag(bag)
-    assert calibration.figures()["calibration_held_arcs"] == 0
-    assert calibration.profile.right_gain == pytest.approx(0.85, rel=0.02)
+    assert calibration.profile.right_gain == pytest.approx(0.85, rel=0.03)
     assert calibration.profile.turning_resistance == pytest.approx(TRUE_TURNING, rel=0.15)
-    # Straight runs alone cannot tell the two apart: no turning resistance is fitted.
+    # Straight runs alone cannot tell the two apart: the realistic robot's value is kept.
     only_straight = [step for step in DRIVE if step[0] == step[1]]
     straight = calibrate_bag(record_drive(tmp_path / "straight.bag", UNUSUAL, drive=only_straight))
-    assert straight.profile.turning_resistance == 0.0
+    assert straight.profile.turning_resistance == pytest.approx(
+        NoiseProfile.realistic().turning_resistance, rel=0.05
+    )
+    assert "nothing says how the ground resists turning" in straight.notes[-1]
 
 
 def test_a_replay_says_where_odometry_puts_the_robot_not_only_how_far_the_wheels_turned(
