@@ -16,7 +16,6 @@ from duckielib.missions import SQUARE_THEN_CIRCLE
 from duckielib.plots import ImageView, Recording, RunPlayer
 from duckielib.plots.player import _DPI
 from duckielib.sim import VirtualDuckiebot
-from duckielib.sim.world import World
 
 CHASSIS = np.array([0xF2, 0xC2, 0x00])
 
@@ -51,7 +50,9 @@ def test_a_mission_bag_gives_poses_states_and_lights_on_one_clock(mission_player
     names = [name for _, name in recording.states]
     assert names == [state.name for state in SQUARE_THEN_CIRCLE.states] + ["done"]
     assert len(recording.patterns) == 8
-    assert recording.world == World()  # the simulator's mat: the ground truth stays on it
+    # The realistic robot drifts off the mat's edge (the missions' mat lies on an open floor):
+    # the player draws tiles under the poses instead.
+    assert recording.world is None
     first, last = recording.span
     assert first == pytest.approx(0.0, abs=0.05)
     assert last == pytest.approx(bag.duration, abs=0.05)
@@ -74,7 +75,8 @@ def test_a_frame_shows_the_robot_its_led_colour_and_its_state(mission_player):
     mat, panel = mat_and_panel(frame)
     assert pixels_near(panel, led_rgb(color)) > 2000
     assert pixels_near(mat, led_rgb(color)) > 10
-    assert pixels_near(mat, CHASSIS, tolerance=8) > 300  # the yellow chassis, to scale
+    # The yellow chassis, to scale (the view spans the path, a little more than the mat).
+    assert pixels_near(mat, CHASSIS, tolerance=8) > 250
     caption = mission_player.caption(index)
     assert f"state: square · LEDs: {color}" in caption
     assert mission_player.png(index)[:8] == b"\x89PNG\r\n\x1a\n"

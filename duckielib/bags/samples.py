@@ -11,6 +11,17 @@ To record it again (instructors, after the simulator or the recorded topics chan
     duckie bag repair runs/sample/mission.bag runs/sample/compressed.bag --compression bz2
     cp runs/sample/compressed.bag duckielib/bags/data/square_then_circle_realistic.bag
 
+``square_then_circle_other_robot`` stands in for your own robot's mission bag in notebook 10's
+calibration: the same task driven by the course's nodes (seed 0) on a virtual Duckiebot whose
+motors are weaker than the realistic one's
+(:data:`duckielib.sim.calibrate.CALIBRATION_SAMPLE_ROBOT`).
+To record it again::
+
+    python -c "from duckielib.sim.calibrate import record_other_robot_profile as r; r('other.json')"
+    duckie mission --noise other.json --seed 0 --no-animation --out runs/other
+    duckie bag repair runs/other/mission.bag compressed.bag --compression bz2
+    cp compressed.bag duckielib/bags/data/square_then_circle_other_robot.bag
+
 ``calibration_drive`` stands in for a bag of your own robot's wheel calibration (notebook 10):
 :func:`~duckielib.sim.calibrate.calibration_driver`'s commands and both encoders' ticks,
 recorded on a virtual Duckiebot whose motors are weaker than the realistic one's

@@ -36,7 +36,7 @@ from duckielib.errors import DuckielibError
 from duckielib.plots.canvas import NotebookFigure, draw_tile_grid, tile_span
 from duckielib.plots.world import RobotArtist, draw_mat
 from duckielib.rostime import NS_PER_S
-from duckielib.sim.world import World
+from duckielib.sim.world import OPEN_MAT, World
 
 if TYPE_CHECKING:
     from matplotlib.animation import FuncAnimation
@@ -186,8 +186,8 @@ class Recording:
             bag: the bag, or its path.
             camera_topic: the ``sensor_msgs/CompressedImage`` topic to show; by default the
                 first whose name says it is annotated, else the first there is.
-            world: the mat; by default the simulator's 4 x 4 mat when the bag has ground truth
-                that stays on it, else tiles under the poses, without walls.
+            world: the mat; by default the missions' 4 x 4 mat (without walls) when the bag has
+                ground truth that stays on it, else tiles under the poses.
             title: what the run is (default: the bag's file name).
 
         Raises:
@@ -282,8 +282,8 @@ def _message_pattern(message: Any) -> led_tables.Pattern:
 
 
 def _bag_world(truth: Poses) -> Optional[World]:
-    """The simulator's mat when the true poses stay on it, else None (tiles under the poses)."""
-    mat = World()
+    """The missions' mat when the true poses stay on it, else None (tiles under the poses)."""
+    mat = OPEN_MAT
     if len(truth) and all(mat.contains(float(x), float(y)) for x, y, _ in truth):
         return mat
     return None

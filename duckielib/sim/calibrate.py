@@ -51,6 +51,7 @@ __all__ = [
     "held_commands",
     "record_calibration_drive",
     "record_calibration_sample",
+    "record_other_robot_profile",
     "steady_speeds",
 ]
 
@@ -645,3 +646,11 @@ CALIBRATION_SAMPLE_ROBOT: Dict[str, Any] = {
 def record_calibration_sample(path: PathLike) -> Path:
     """Record the ``calibration_drive`` sample bag's drive, uncompressed, to ``path``."""
     return record_calibration_drive(path, NoiseProfile.realistic(**CALIBRATION_SAMPLE_ROBOT))
+
+
+def record_other_robot_profile(path: PathLike) -> Path:
+    """Write the sample robot's profile (:data:`CALIBRATION_SAMPLE_ROBOT`) to a JSON file.
+
+    ``duckie mission --noise`` with it drives the ``square_then_circle_other_robot`` sample.
+    """
+    return NoiseProfile.realistic(**CALIBRATION_SAMPLE_ROBOT).save(path)

@@ -21,7 +21,7 @@ import pymunk
 from duckielib.config import TILE_SIZE
 from duckielib.errors import ConfigError
 
-__all__ = ["World", "WALL_THICKNESS", "build_space", "space_stepper"]
+__all__ = ["OPEN_MAT", "World", "WALL_THICKNESS", "build_space", "space_stepper"]
 
 #: Thickness of the boundary walls, in metres (they lie outside the mat).
 WALL_THICKNESS = 0.02
@@ -87,6 +87,12 @@ class World:
             y = j * self.tile_size
             lines.append(((0.0, y), (self.width, y)))
         return lines
+
+
+#: The mat the missions are driven on: the course's mat lying on an open floor, as a real one
+#: does. A robot whose odometry drifts drives off its edge and on, instead of being held by a
+#: wall that no real floor has.
+OPEN_MAT = World(walls=False)
 
 
 def build_space(world: World) -> pymunk.Space:

@@ -344,12 +344,15 @@ def drive_apart(
     from duckielib.ros.graph import Graph
     from duckielib.sim import VirtualDuckiebot
     from duckielib.sim import link as wire
+    from duckielib.sim.world import OPEN_MAT
 
     robot_end, nodes_end = socket.socketpair()
     wall = time.perf_counter()
     deadline = None if wall_limit is None else time.monotonic() + wall_limit
     graph = Graph(echo_logs=False)
-    bot = VirtualDuckiebot(seed=seed, noise=noise, graph=graph, start_pose=chosen.start)
+    bot = VirtualDuckiebot(
+        seed=seed, noise=noise, graph=graph, world=OPEN_MAT, start_pose=chosen.start
+    )
     link = wire.RobotLink(robot_end, bot, REPLY_TIMEOUT_S, deadline)
     recorder = BagRecorder(files["bag"], [bot.namespace + name for name in RECORDED], graph=graph)
     try:

@@ -448,9 +448,12 @@ def drive_and_record(
     from duckielib.nodes import odometry_node
     from duckielib.ros.graph import STALL_LIMIT_S, Graph, NodeCrashed
     from duckielib.sim import VirtualDuckiebot
+    from duckielib.sim.world import OPEN_MAT
 
     graph = Graph(echo_logs=False, stall_limit=stall_limit or STALL_LIMIT_S)
-    bot = VirtualDuckiebot(seed=seed, noise=noise, graph=graph, start_pose=chosen.start)
+    bot = VirtualDuckiebot(
+        seed=seed, noise=noise, graph=graph, world=OPEN_MAT, start_pose=chosen.start
+    )
     finished: List[bool] = []
 
     def mission_main() -> None:
@@ -626,7 +629,7 @@ def write_animation(bag: Path, title: str, path: Path, frames: int = 100) -> Pat
         DuckielibError: if it holds nothing to play, or the file cannot be written.
     """
     from duckielib.plots import Recording, RunPlayer
-    from duckielib.sim.world import World
+    from duckielib.sim.world import OPEN_MAT
 
-    recording = Recording.from_bag(bag, world=World(), title=title)
+    recording = Recording.from_bag(bag, world=OPEN_MAT, title=title)
     return RunPlayer.lasting(recording, max_frames=frames).save(path)
