@@ -489,7 +489,9 @@ def test_a_student_plays_a_run_in_the_player_and_sees_the_robot_its_lights_and_i
     pixels = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB")).astype(int)
     green = np.round(np.asarray(pattern_colors(pattern_named(lights))[0]) * 255)
     chassis = np.array([0xF2, 0xC2, 0x00])
-    for color, least in ((green, 2000), (chassis, 300)):
+    # The chassis is drawn to scale in a view that spans the whole path: the realistic robot
+    # drives a little beyond the mat, so it is about 300 pixels here.
+    for color, least in ((green, 2000), (chassis, 250)):
         assert np.all(np.abs(pixels - color) <= 24, axis=2).sum() >= least, (
             f"the screenshot ({tmp_path / 'player.png'}) lacks the colour {color}"
         )
