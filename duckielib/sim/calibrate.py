@@ -552,12 +552,13 @@ def calibrate_bag(
     """
     bags: List[Any] = list(bag) if isinstance(bag, (list, tuple)) else [bag]
     opened = [item if isinstance(item, Bag) else Bag(item) for item in bags]
+    others = [item if isinstance(item, Bag) else Bag(item) for item in check]  # before the fit
     profile, driven, notes = fit_profile(opened, name, command_topic, left_topic, right_topic)
     replays = tuple(
         replay_bag(item, profile, 0, command_topic, left_topic, right_topic, solution)
         for item in opened
     )
-    checks = tuple(replay_bag(other, profile, 0, solution=solution) for other in check)
+    checks = tuple(replay_bag(other, profile, 0, solution=solution) for other in others)
     return Calibration(profile, replays, checks, driven, notes)
 
 

@@ -54,10 +54,15 @@ def lab(tmp_path, root=None):
         "JUPYTER_RUNTIME_DIR": str(tmp_path / "runtime"),
         "JUPYTER_CONFIG_DIR": str(tmp_path / "config"),
     }
-    # Every cell in the page, not only those scrolled into view, so the test reads them all.
+    # Every cell in the page, not only those scrolled into view, so the test reads them all;
+    # and the notebook's kernel started without asking, as a student who ticked "Always start
+    # the preferred kernel" in JupyterLab's "Select Kernel" dialog has it (on a loaded machine
+    # JupyterLab may not find the notebook's running session in time, and asks).
     settings = tmp_path / "config" / "lab" / "user-settings" / "@jupyterlab" / "notebook-extension"
     settings.mkdir(parents=True, exist_ok=True)
-    (settings / "tracker.jupyterlab-settings").write_text('{"windowingMode": "none"}')
+    (settings / "tracker.jupyterlab-settings").write_text(
+        '{"windowingMode": "none", "autoStartDefaultKernel": true}'
+    )
     options = f"--no-browser --port={port} --ip=127.0.0.1 --IdentityProvider.token={TOKEN}"
     folder = [] if root is None else [f"LAB_DIR={root}"]
     server = subprocess.Popen(

@@ -198,6 +198,11 @@ def test_the_commands_print_name_value_lines_and_write_a_profile_duckie_mission_
     figures = json.loads(capsys.readouterr().out)
     assert figures["noise"] == "ente"
     assert figures["travel_ratio_right"] == pytest.approx(1.0, abs=0.05)
+    # A bag to check that is not there is said before anything is fitted, and nothing written.
+    missing = tmp_path / "other.bag"
+    assert main(["calibrate", str(bag), "--check", str(missing), "-o", str(tmp_path / "x.json")])
+    assert f"There is no file {missing}." in capsys.readouterr().err
+    assert not (tmp_path / "x.json").exists()
     with pytest.raises(SystemExit) as refused:
         main(["sim", "replay", str(bag), "--noise", "noisy"])
     assert refused.value.code == 2
