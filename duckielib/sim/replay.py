@@ -58,6 +58,8 @@ _OPEN_FLOOR = World(tiles_x=60, tiles_y=60)
 _COAST_S = 1.0
 #: The length of the windows whose tick rates are compared, in seconds.
 WINDOW_S = 1.0
+#: The least net turn, as a share of the wheels' travel, for which ``turn_ratio`` is given.
+TURN_SHARE = 0.05
 #: A robot's clock this far from the recorder's (seconds) is said, and the times aligned.
 SKEW_LIMIT_S = 0.5
 
@@ -184,9 +186,15 @@ class ReplayReport:
 
     @property
     def turn_ratio(self) -> float:
-        """The simulated turn over the real one (NaN if the real robot did not turn)."""
+        """The simulated turn over the real one.
+
+        NaN when the real robot's net turn is under :data:`TURN_SHARE` of its wheels' mean
+        travel (a run that comes back to its heading): a ratio of two small numbers says
+        nothing there, and the turns in ticks and the paths do.
+        """
         real = self.turn("real")
-        return self.turn("sim") / real if real else math.nan
+        travel = 0.5 * (self.left.real_travel + self.right.real_travel)
+        return self.turn("sim") / real if real and abs(real) >= TURN_SHARE * travel else math.nan
 
     def figures(self) -> Dict[str, Union[str, int, float]]:
         """The report as ``name: value`` pairs (what ``duckie sim replay`` prints)."""

@@ -440,7 +440,12 @@ def _print_figures(figures: Dict[str, Any], as_json: bool) -> None:
     if as_json:
         import json
 
-        print(json.dumps(figures, indent=2))
+        # A figure that says nothing (NaN) is JSON's null: NaN is not JSON.
+        clean = {
+            name: None if isinstance(value, float) and math.isnan(value) else value
+            for name, value in figures.items()
+        }
+        print(json.dumps(clean, indent=2, allow_nan=False))
     else:
         for name, value in figures.items():
             print(f"{name}: {value}")

@@ -1427,6 +1427,12 @@ CLAIMS["10_bag_analysis"] += [
         "held 1 s",
     ),
     Claim(
+        says="`calibration_turn_ratio` above is `nan` on a mission",
+        printed=r"calibration_turn_ratio: nan\n",
+        holds=lambda: True,
+        meaning="the calibration prints its turn ratio as nan",
+    ),
+    Claim(
         says="headings that agree, paths that end together",
         printed=rf"realistic: simulated over real travel [^\n]*the paths end "
         rf"(?P<realistic_gap>{_NUMBER}) cm apart\n\s*my_robot: simulated over real travel "

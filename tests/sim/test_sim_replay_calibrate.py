@@ -73,7 +73,9 @@ def record_drive(path, profile, drive=DRIVE, seed=3, start=5.0, clock_ahead=0.0)
     return path
 
 
-def test_a_mission_bag_replays_into_its_own_profile_tick_for_tick(tmp_path):
+def test_a_mission_bag_replays_into_its_own_profile_tick_for_tick(tmp_path, capsys):
+    from duckielib.tools.cli import main
+
     run = run_mission(out=tmp_path / "run", noise="realistic", seed=4, animation=False)
     report = replay_bag(run.folder / "mission.bag", noise="realistic", seed=4)
     assert report.commands > 500
@@ -90,6 +92,13 @@ def test_a_mission_bag_replays_into_its_own_profile_tick_for_tick(tmp_path):
     figures = ideal.figures()
     assert figures["noise"] == "ideal"
     assert set(figures) >= {"travel_ratio_left", "travel_ratio_right", "tick_rate_rms"}
+    # The mission comes back to its heading: its net turn is a few ticks of thousands, and a
+    # ratio of two small numbers would say nothing.
+    assert abs(figures["turn_ticks_real"]) < 0.05 * report.left.real_travel
+    assert math.isnan(figures["turn_ratio"])
+    bag = str(run.folder / "mission.bag")
+    assert main(["sim", "replay", bag, "--noise", "ideal", "--seed", "4", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["turn_ratio"] is None  # JSON has no NaN
 
 
 def _speeds(profile, duty):
@@ -197,6 +206,7 @@ def test_the_commands_print_name_value_lines_and_write_a_profile_duckie_mission_
     assert main(["sim", "replay", str(bag), "--noise", str(profile), "--json"]) == 0
     figures = json.loads(capsys.readouterr().out)
     assert figures["noise"] == "ente"
+    assert figures["turn_ratio"] == pytest.approx(1.0, abs=0.05)
     assert figures["travel_ratio_right"] == pytest.approx(1.0, abs=0.05)
     # A bag to check that is not there is said before anything is fitted, and nothing written.
     missing = tmp_path / "other.bag"
