@@ -37,7 +37,14 @@ from duckielib.bags import Bag
 from duckielib.bags.analysis import encoder_resolution
 from duckielib.errors import BagError
 from duckielib.sim.noise import REALISTIC_SPEED_CURVE, REALISTIC_TURNING_RESISTANCE, NoiseProfile
-from duckielib.sim.replay import ReplayReport, aligned_encoders, replay_bag, wheel_commands
+from duckielib.sim.replay import (
+    WINDOW_S,
+    ReplayReport,
+    aligned_encoders,
+    compared_readings,
+    replay_bag,
+    wheel_commands,
+)
 from duckielib.sim.wheels import CommandSteps, command_steps, counted_angles
 
 __all__ = [
@@ -64,10 +71,6 @@ LEVEL_STEP = 0.02
 EDGE_S = 0.1
 #: The speed the fitted kinematics gain makes right, m/s (the course's driving speed).
 GAIN_SPEED = 0.2
-#: How long after the last command the wheels are still compared (they coast to a stop).
-COAST_S = 1.0
-#: The windows whose ticks are compared, in seconds.
-WINDOW_S = 1.0
 #: A wheel counts as driven by a command of at least this duty cycle.
 DRIVEN_DUTY = 0.02
 #: The shares of the driven time below which the speed curve's knots lie (the duties the
@@ -290,20 +293,9 @@ def _run_of(
     commands = wheel_commands(bag, command_topic)
     streams, skew = aligned_encoders(bag, left_topic, right_topic)
     resolution = encoder_resolution(bag, *streams)
-    start = float(commands.t[0])
-    end = min(float(commands.t[-1]) + COAST_S, *(float(stream.t[-1]) for stream in streams))
-    t, angles = [], []
-    for stream in streams:
-        keep = (stream.t >= start) & (stream.t <= end)
-        if np.count_nonzero(keep) < 2:
-            raise BagError(
-                f"{bag.path.name} has fewer than two encoder readings of a wheel while its "
-                "wheel commands run, so nothing says how far the commands turned the wheels. "
-                "Record the encoders and the commands at the same time."
-            )
-        t.append(stream.t[keep] - start)
-        ticks = stream.ticks[keep].astype(float)
-        angles.append((ticks - ticks[0]) * math.tau / resolution)
+    start, end, kept = compared_readings(bag, commands, streams)
+    t = [times - start for times, _ in kept]
+    angles = [(ticks - ticks[0]) * math.tau / resolution for _, ticks in kept]
     steps = command_steps(commands.t - start, commands.left, commands.right, end - start)
     first = max(float(t[0][0]), float(t[1][0]))
     last = min(float(t[0][-1]), float(t[1][-1]))
@@ -367,7 +359,6 @@ class _Model:
             right_gain=round(float(vector[-2]), 4),
             breakaway_pwm=None,
             speed_curve=self.curve(vector),
-            right_speed_curve=None,
             turning_resistance=round(float(vector[-1]), 4),
         )
 

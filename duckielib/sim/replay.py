@@ -45,6 +45,7 @@ __all__ = [
     "ReplayReport",
     "WheelReplay",
     "aligned_encoders",
+    "compared_readings",
     "replay_bag",
     "wheel_commands",
 ]
@@ -55,7 +56,7 @@ _COMMAND_TOPICS = ("wheels_driver_node/wheels_cmd", "wheels_driver_node/wheels_c
 #: A mat large enough that a replayed run never meets a wall.
 _OPEN_FLOOR = World(tiles_x=60, tiles_y=60)
 #: How long after the last command the wheels are still compared (they coast to a stop).
-_COAST_S = 1.0
+COAST_S = 1.0
 #: The length of the windows whose tick rates are compared, in seconds.
 WINDOW_S = 1.0
 #: The least net turn, as a share of the wheels' travel, for which ``turn_ratio`` is given.
@@ -297,18 +298,11 @@ def replay_bag(
     commands = wheel_commands(bag, command_topic)
     streams, skew = aligned_encoders(bag, left_topic, right_topic)
     notes = [] if skew is None else [skew]
-    start = float(commands.t[0])
-    end = min(float(commands.t[-1]) + _COAST_S, *(float(s.t[-1]) for s in streams))
-    kept = [_within(stream, start, end) for stream in streams]
+    start, end, kept = compared_readings(bag, commands, streams)
     # The simulated robot is switched on when the bag starts, and stands still until the
     # first command: a bag of the simulator replays on its own clock, reading for reading.
     # (To the millisecond: a bag written here starts at 1 ns, ROS's smallest valid time.)
     origin = min(start, math.floor(bag.start_ns / 1e6) / 1e3)
-    if any(len(t) < 2 for t, _ in kept):
-        raise BagError(
-            f"{bag.path.name} has fewer than two encoder readings of a wheel while its wheel "
-            "commands run: record the encoders and the commands at the same time."
-        )
     sim = Simulator(
         seed=seed,
         noise=profile,
@@ -361,6 +355,28 @@ def replay_bag(
         paths=paths,
         notes=tuple(notes),
     )
+
+
+def compared_readings(
+    bag: Bag, commands: Commands, streams: Tuple[EncoderStream, EncoderStream]
+) -> Tuple[float, float, List[Tuple[np.ndarray, np.ndarray]]]:
+    """The span where commands and readings are compared, and each wheel's readings there.
+
+    It runs from the first command to the last one's coast (or the readings' end); the
+    readings are (times, ticks).
+
+    Raises:
+        BagError: if a wheel has fewer than two readings there.
+    """
+    start = float(commands.t[0])
+    end = min(float(commands.t[-1]) + COAST_S, *(float(s.t[-1]) for s in streams))
+    kept = [_within(stream, start, end) for stream in streams]
+    if any(len(t) < 2 for t, _ in kept):
+        raise BagError(
+            f"{bag.path.name} has fewer than two encoder readings of a wheel while its wheel "
+            "commands run: record the encoders and the commands at the same time."
+        )
+    return start, end, kept
 
 
 def aligned_encoders(

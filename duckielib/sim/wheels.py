@@ -25,7 +25,7 @@ from scipy.signal import lfilter
 
 from duckielib.config import DB21, RobotConfig
 from duckielib.sim.noise import NoiseProfile
-from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, REST_SPEED
+from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, REST_SPEED, loaded_speeds
 from duckielib.sim.simulator import PHYSICS_RATE_HZ
 
 __all__ = ["CommandSteps", "command_steps", "counted_angles"]
@@ -123,9 +123,7 @@ def _speeds_with_breakaway(
             0.0 if pwm_r[step] < breakaway and -REST_SPEED < right < REST_SPEED else drive_r[step]
         )
         if turning:
-            mean = 0.5 * (target_l + target_r)
-            half = 0.5 * (target_r - target_l) / (1.0 + turning * abs(mean))
-            target_l, target_r = mean - half, mean + half
+            target_l, target_r = loaded_speeds(target_l, target_r, turning)
         left += (target_l - left) * alpha
         right += (target_r - right) * alpha
         out[0][step] = left
