@@ -250,7 +250,7 @@ def test_a_square_turned_the_wrong_way_loses_the_square_but_not_the_circle(tmp_p
     }  # fmt: skip
     assert driving.reasons[0] == "In state square, turn 1 turned 0°; it should turn 90° clockwise."
     assert (
-        "side 1 ended 2.51 m from where it should (x = 1.57 m, y = 0.32 m)" in (driving.reasons[1])
+        "side 1 ended 2.50 m from where it should (x = 1.57 m, y = 0.32 m)" in (driving.reasons[1])
     )
     assert not [reason for reason in driving.reasons if not reason.startswith("In state square")]
 

@@ -121,8 +121,8 @@ FORGETS_THE_ZERO_COMMAND = (
         "",
     ),
     (
-        "            drive(v, sign * v / radius)\n            rate.sleep()\n        settle()\n",
-        "            drive(v, sign * v / radius)\n            rate.sleep()\n",
+        "ARC_TURN_RATE, omega)))\n            rate.sleep()\n        settle()\n",
+        "ARC_TURN_RATE, omega)))\n            rate.sleep()\n",
     ),
     (
         '    drive(0.0, 0.0)\n    announce.publish(String(data="done"))',
@@ -170,9 +170,11 @@ def test_wheels_left_turning_after_done_fail_the_mission_with_the_distance(
     assert report.states_in_order
     seconds, rolled, turned = report.after_done
     assert seconds == pytest.approx(STILL_AFTER_DONE_S, abs=0.05)
-    # The last command of the arc, MIN_SPEED 0.12 m/s along 0.2 m (0.6 rad/s), for 5 s.
-    assert rolled == pytest.approx(5 * 0.12, rel=0.05)
-    assert turned == pytest.approx(5 * 0.12 / 0.2, rel=0.1)
+    # The last command of the arc, for 5 s: on the circle, aiming 0.6 rad further round, the
+    # robot sees its aim 0.3 rad off its heading, so go_to_point asks for ARC_SPEED 0.15 m/s
+    # times cos(0.3), on a curve that stays on the 0.2 m circle.
+    assert rolled == pytest.approx(5 * 0.15 * math.cos(0.3), rel=0.05)
+    assert turned == pytest.approx(rolled / 0.2, rel=0.1)
     assert not report.still_after_done
     assert not report.stops_held  # the end is a stop: the grader's stop points go too
     assert report.as_dict()["checks"]["still_after_done"] is False

@@ -26,7 +26,7 @@ To record it again::
 :func:`~duckielib.sim.calibrate.calibration_driver`'s commands and both encoders' ticks,
 recorded on a virtual Duckiebot whose motors are weaker than the realistic one's
 (:data:`duckielib.sim.calibrate.CALIBRATION_SAMPLE_ROBOT`: a dead band up to duty 0.15, a
-right motor 7 % weaker, a ground that resists turns more). To record it again::
+right motor 7 % weaker, tyres that scrub less). To record it again::
 
     python -c "from duckielib.sim.calibrate import record_calibration_sample as r; r('c.bag')"
     duckie bag repair c.bag compressed.bag --compression bz2

@@ -56,7 +56,7 @@ def replay_figure(report: Any, path: Union[str, os.PathLike[str]]) -> str:
     figures = report.paths.figures()
     real, simulated = figures["heading_change_real_rad"], figures["heading_change_sim_rad"]
     fig.suptitle(
-        f"{report.bag} replayed on {report.noise}: heading {real:+.2f} rad on the bag, "
+        f"{report.bag} replayed on {report.noise}\nheading {real:+.2f} rad on the bag, "
         f"{simulated:+.2f} rad simulated"
     )
     fig.tight_layout()

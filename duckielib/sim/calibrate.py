@@ -8,9 +8,11 @@ replays the bag's whole command sequence through the simulator's motors
 ticks window by window, the drift of each wheel and of the turn between them (the right
 wheel's ticks minus the left's, which odometry's heading comes from) over the whole run. The
 model is one speed curve (a dead band, then knots where the commands spent their time, then
-the realistic curve's shape to duty 1), the right motor's gain on it and the ground's
-resistance to turning. What a bag cannot say (a curve beyond the duties it drove, a ground
-never turned on) keeps the realistic robot's value: a weak prior ties every parameter to it.
+the realistic curve's shape to duty 1), the right motor's gain on it and the tyres' scrub (how
+much of a difference of the wheels' speeds the ground takes while the robot rolls; the scrub's
+width and any further resistance keep the realistic values). What a bag cannot say (a curve
+beyond the duties it drove, a ground never turned on) keeps the realistic robot's value: a
+weak prior ties every parameter to it.
 The fitted profile keeps the realistic profile's other imperfections (wheel size and track,
 slip, encoder jitter, the encoder driver's counting rule: encoders alone cannot measure them)
 and is checked by replaying the bag into it with the simulator itself (:mod:`.replay`), and
@@ -36,7 +38,12 @@ from scipy.optimize import least_squares
 from duckielib.bags import Bag
 from duckielib.bags.analysis import encoder_resolution
 from duckielib.errors import BagError
-from duckielib.sim.noise import REALISTIC_SPEED_CURVE, REALISTIC_TURNING_RESISTANCE, NoiseProfile
+from duckielib.sim.noise import (
+    REALISTIC_SCRUB_WIDTH,
+    REALISTIC_SPEED_CURVE,
+    REALISTIC_TURNING_SCRUB,
+    NoiseProfile,
+)
 from duckielib.sim.replay import (
     WINDOW_S,
     ReplayReport,
@@ -85,7 +92,9 @@ _PRIOR_DEAD_BAND = (0.12, 0.1)
 _PRIOR_RIGHT_GAIN = (1.0, 0.2)
 #: The right motor's gains the fit starts from, keeping the best fit.
 _RIGHT_GAIN_STARTS = (0.85, 1.0, 1.15)
-_PRIOR_TURNING = (REALISTIC_TURNING_RESISTANCE, 1.5)
+_PRIOR_SCRUB = (REALISTIC_TURNING_SCRUB, 3.0)
+#: The largest scrub the fit tries: a little below its width (see NoiseProfile.turning_scrub).
+_MOST_SCRUB = 0.99 * REALISTIC_SCRUB_WIDTH
 _PRIOR_SPEED_SPREAD = 0.5  # of the realistic speed at a knot
 #: The prior's weight against the bag's windows (each window one residual per wheel).
 _PRIOR_WEIGHT = 0.3
@@ -146,7 +155,7 @@ class Calibration:
                 speed = gains[wheel] * _speed_on(curves[wheel], duty)
                 figures[f"calibration_speed_at_{duty:g}_{wheel}"] = round(speed, 3)
         figures["calibration_right_gain"] = self.profile.right_gain
-        figures["calibration_turning_resistance"] = self.profile.turning_resistance
+        figures["calibration_turning_scrub"] = self.profile.turning_scrub
         figures["calibration_kinematics_gain"] = self.profile.kinematics_gain
         named = [("calibration", report) for report in self.replays[:1]]
         named += [
@@ -321,20 +330,23 @@ class _Model:
     """The fitted parameters, as one vector.
 
     The dead band, the speed at each knot, the right motor's gain on that curve and the
-    ground's resistance to turning.
+    tyres' scrub (held at the realistic value when nothing in the bags turns the robot).
     """
 
     knots: Tuple[float, ...]
+    ground_seen: bool = True
 
     def start(self) -> np.ndarray:
         speeds = [max(_speed_on(REALISTIC_SPEED_CURVE, duty), 0.1) for duty in self.knots]
         dead_band = min(_PRIOR_DEAD_BAND[0], self.knots[0] - 0.02)
-        return np.array([dead_band, *speeds, 1.0, _PRIOR_TURNING[0]])
+        return np.array([dead_band, *speeds, 1.0, _PRIOR_SCRUB[0]])
 
     def bounds(self) -> Tuple[np.ndarray, np.ndarray]:
         count = len(self.knots)
         low = [0.0] + [0.0] * count + [0.5, 0.0]
-        high = [max(0.001, self.knots[0] - 0.01)] + [40.0] * count + [1.5, 10.0]
+        high = [max(0.001, self.knots[0] - 0.01)] + [40.0] * count + [1.5, _MOST_SCRUB]
+        if not self.ground_seen:  # keep the realistic scrub: nothing in the bag tells it
+            low[-1], high[-1] = _PRIOR_SCRUB[0] - 1e-9, _PRIOR_SCRUB[0] + 1e-9
         return np.array(low), np.array(high)
 
     def curve(self, vector: np.ndarray) -> Curve:
@@ -359,7 +371,7 @@ class _Model:
             right_gain=round(float(vector[-2]), 4),
             breakaway_pwm=None,
             speed_curve=self.curve(vector),
-            turning_resistance=round(float(vector[-1]), 4),
+            turning_scrub=round(float(vector[-1]), 4),
         )
 
     def prior(self, vector: np.ndarray) -> np.ndarray:
@@ -372,7 +384,7 @@ class _Model:
                 [(vector[0] - _PRIOR_DEAD_BAND[0]) / _PRIOR_DEAD_BAND[1]],
                 (speeds - realistic) / spread,
                 [(vector[-2] - _PRIOR_RIGHT_GAIN[0]) / _PRIOR_RIGHT_GAIN[1]],
-                [(vector[-1] - _PRIOR_TURNING[0]) / _PRIOR_TURNING[1]],
+                [(vector[-1] - _PRIOR_SCRUB[0]) / _PRIOR_SCRUB[1]],
             ]
         )
 
@@ -486,7 +498,8 @@ def fit_profile(
             )
         runs.append(run)
     duties = np.concatenate([run.duties() for run in runs])
-    model = _Model(_knots(duties))
+    differs = max(float(np.max(np.abs(run.steps.left - run.steps.right))) for run in runs)
+    model = _Model(_knots(duties), ground_seen=differs >= LEVEL_STEP)
     fit = None
     for right_gain in _RIGHT_GAIN_STARTS:  # the fit has a valley for each way the robot pulls
         start = model.start()
@@ -502,8 +515,7 @@ def fit_profile(
             fit = tried
     assert fit is not None  # _RIGHT_GAIN_STARTS is not empty
     driven = (float(np.quantile(duties, 0.02)), float(np.quantile(duties, 0.98)))
-    differs = max(float(np.max(np.abs(run.steps.left - run.steps.right))) for run in runs)
-    if differs < LEVEL_STEP:
+    if not model.ground_seen:
         notes.append(
             "The wheels are never driven at different commands, so nothing says how the "
             "ground resists turning: the realistic robot's value is kept."
@@ -625,13 +637,14 @@ def record_calibration_drive(
 
 #: The robot of the course's ``calibration_drive`` sample bag (:mod:`duckielib.bags.samples`):
 #: the realistic profile with weaker motors (a dead band up to duty 0.15), a right motor 7 %
-#: weaker, and a ground that resists turns more.
+#: weaker, and tyres that scrub less (a small difference of the wheels' speeds keeps 30 % of
+#: itself, against the realistic 9 %).
 CALIBRATION_SAMPLE_ROBOT: Dict[str, Any] = {
     "name": "calibration_sample",
     "speed_curve": ((0.15, 0.0), (0.2, 1.5), (0.3, 3.0), (0.4, 5.2), (0.55, 7.8), (1.0, 13.0)),
     "breakaway_pwm": 89,
     "right_gain": 0.93,
-    "turning_resistance": 0.9,
+    "turning_scrub": 5.0,
 }
 
 

@@ -11,13 +11,15 @@ profiles are named:
 - :meth:`NoiseProfile.realistic`: a robot like the real DB21s measured on the course's exercise
   (public bags of wheel commands and encoder ticks). Its wheels turn at these speeds (rad/s,
   real robots in brackets): 1.7 turning in place at duty 0.175 (1.6 to 2.0), 3.6 at 0.30 (3.6
-  to 3.7), 6.3 at 0.40 (6.1 to 6.7), and on an arc of 0.62 and 0.18, 6.7 outer and 5.1 inner
-  (6.7 to 7.3 and 5.0 to 5.4: the ground resists turning, so the slow wheel is dragged
-  along). That is a dead band up to duty 0.12, then about half the speed the driver's linear
-  law promises: at the default kinematics gain the robot drives at about half the commanded
-  speed. The right motor is 3 % weaker than the left (so trim matters); the wheels are 5 %
-  smaller and the track 10 % wider than the nominal ones odometry uses (tyres scrub in turns),
-  so odometry drifts as a real robot's does; tyres slip when asked for more than the mat's
+  to 3.7), 6.3 at 0.40 (6.1 to 6.7), and on an arc of 0.62 and 0.18, 6.7 outer and 5.2 inner
+  (6.7 to 7.3 and 5.0 to 5.4). That is a dead band up to duty 0.12, then about half the speed
+  the driver's linear law promises: at the default kinematics gain the robot drives at about
+  half the commanded speed. While it rolls, its tyres scrub: the ground lets through only 9 %
+  of a small difference of the two motors' speeds and about 19 % of the arc's, dragging the
+  slow wheel along, as a real robot's wheels answered different commands (a robot turning on
+  the spot is not slowed). The right motor is 3 % weaker than the left (so trim matters); the
+  wheels are 5 % smaller and the track 10 % wider than the nominal ones odometry uses, so
+  odometry drifts as a real robot's does; tyres slip when asked for more than the mat's
   friction gives; encoder samples come a few milliseconds late or early and count by the
   encoder driver's rule (the sign of the last command); a wheel at rest needs the dead band's
   edge to break free.
@@ -45,8 +47,8 @@ __all__ = ["NoiseProfile", "noise_profile"]
 
 #: The realistic motors' speed (rad/s) against the duty cycle: a dead band up to 0.12, then
 #: about half the driver's linear law (27 rad/s at 1). On a straight line or turning in place
-#: the wheels turn at these speeds; on an arc :data:`REALISTIC_TURNING_RESISTANCE` drags the
-#: slow wheel along (``duckie sim motors`` sets them next to real DB21 robots').
+#: the wheels turn at these speeds; on an arc the tyres' scrub (:data:`REALISTIC_TURNING_SCRUB`)
+#: drags the slow wheel along (``duckie sim motors`` sets them next to real DB21 robots').
 REALISTIC_SPEED_CURVE = (
     (0.12, 0.0),
     (0.175, 1.8),
@@ -55,8 +57,14 @@ REALISTIC_SPEED_CURVE = (
     (0.62, 10.4),
     (1.0, 14.9),
 )
-#: How much the ground resists the realistic robot's turns while it rolls (see NoiseProfile).
-REALISTIC_TURNING_RESISTANCE = 0.65
+#: How the ground resists the realistic robot's turns while it rolls (see NoiseProfile): the
+#: tyres' scrub and its width, rad/s of half the wheels' speed difference, and no further
+#: resistance growing with the speed. Fitted to how a real DB21's wheels answered different
+#: commands, half a second at a time, over 26 closed-loop runs (README, "On real robots"): a
+#: small difference keeps 9 % of itself, the arc 0.18 / 0.62 about 19 %.
+REALISTIC_TURNING_SCRUB = 6.45
+REALISTIC_SCRUB_WIDTH = 7.12
+REALISTIC_TURNING_RESISTANCE = 0.0
 #: The realistic robot's calibrated kinematics gain: with it the robot drives within about
 #: 20 % of the speed asked from 0.1 to 0.3 m/s (at the default 1.0, at about 40 %).
 REALISTIC_KINEMATICS_GAIN = 2.0
@@ -96,6 +104,14 @@ class NoiseProfile:
             s/rad: half the difference of the speeds the motors alone would give is divided by
             1 + turning_resistance * the wheels' mean speed (rad/s). On an arc the slow wheel
             is dragged along by the fast one; turning in place is not slowed.
+        turning_scrub: the most the tyres' scrub takes off half the wheels' speed difference
+            while the robot rolls, in rad/s: ``turning_scrub * tanh(d / scrub_width)`` off half
+            the difference d of the speeds the motors alone would give, before
+            ``turning_resistance`` divides what is left. A small difference keeps
+            ``1 - turning_scrub / scrub_width`` of itself, a large one loses ``turning_scrub``.
+            In full while the robot rolls more than it spins, nothing when turning in place.
+        scrub_width: the half difference (rad/s) over which the scrub grows to its most; larger
+            than ``turning_scrub``, so the ground never turns the robot the other way.
         kinematics_gain: the kinematics gain in the robot's calibration file, which its
             kinematics node starts with (``kinematics_node/gain``): a DB21's owner raises it
             from the default 1.0 until the robot drives at about the speed asked.
@@ -113,6 +129,8 @@ class NoiseProfile:
     baseline_scale: float = 1.0
     encoder_counts_by_command: bool = False
     turning_resistance: float = 0.0
+    turning_scrub: float = 0.0
+    scrub_width: float = 1.0
     kinematics_gain: float = 1.0
 
     def __post_init__(self) -> None:
@@ -148,11 +166,7 @@ class NoiseProfile:
             raise ConfigError(
                 f"NoiseProfile.kinematics_gain must be a number between 0.1 and 10, not {gain!r}."
             )
-        value = self.turning_resistance
-        if not (_is_number(value) and 0 <= value <= 20):
-            raise ConfigError(
-                f"NoiseProfile.turning_resistance must be a number between 0 and 20, not {value!r}."
-            )
+        self._check_ground()
         if not isinstance(self.encoder_counts_by_command, bool):
             raise ConfigError(
                 "NoiseProfile.encoder_counts_by_command must be True or False, "
@@ -161,6 +175,25 @@ class NoiseProfile:
         for field in ("speed_curve", "right_speed_curve"):
             if getattr(self, field) is not None:
                 object.__setattr__(self, field, _check_curve(getattr(self, field), field))
+
+    def _check_ground(self) -> None:
+        """Raise a ConfigError if the ground's resistance or the tyres' scrub is impossible."""
+        value = self.turning_resistance
+        if not (_is_number(value) and 0 <= value <= 20):
+            raise ConfigError(
+                f"NoiseProfile.turning_resistance must be a number between 0 and 20, not {value!r}."
+            )
+        width = self.scrub_width
+        if not (_is_number(width) and 0 < width <= 50):
+            raise ConfigError(
+                f"NoiseProfile.scrub_width must be a number of rad/s in (0, 50], not {width!r}."
+            )
+        value = self.turning_scrub
+        if not (_is_number(value) and 0 <= value < width):
+            raise ConfigError(
+                "NoiseProfile.turning_scrub must be a number of rad/s from 0 to less than "
+                f"scrub_width ({width!r}), not {value!r}."
+            )
 
     @classmethod
     def ideal(cls, **changes: object) -> NoiseProfile:
@@ -182,6 +215,8 @@ class NoiseProfile:
             baseline_scale=1.1,
             encoder_counts_by_command=True,
             turning_resistance=REALISTIC_TURNING_RESISTANCE,
+            turning_scrub=REALISTIC_TURNING_SCRUB,
+            scrub_width=REALISTIC_SCRUB_WIDTH,
             kinematics_gain=REALISTIC_KINEMATICS_GAIN,
         )
         return profile.replace(**changes)

@@ -339,7 +339,7 @@ def replay_bag(
     paths = None
     if solution is not None:
         resolution = encoder_resolution(bag, *streams)
-        paths = _paths(solution, resolution, kept, sampled, sim, start - origin)
+        paths = _paths(solution, resolution, kept, sampled, sim, (start, origin))
     return ReplayReport(
         bag=bag.path.name,
         noise=profile.name,
@@ -418,9 +418,14 @@ def _paths(
     kept: List[Tuple[np.ndarray, np.ndarray]],
     sampled: List[np.ndarray],
     sim: Simulator,
-    start: float,
+    clocks: Tuple[float, float],
 ) -> Paths:
-    """Odometry from the bag's and the simulated ticks, and the simulated truth, from (0, 0, 0)."""
+    """Odometry from the bag's and the simulated ticks, and the simulated truth, from (0, 0, 0).
+
+    ``clocks`` is (the first command's time, the simulator's zero), both on the bag's clock;
+    the tracks' times are seconds from the first command.
+    """
+    start, origin = clocks
     tracks = []
     for label, counts in (
         ("real ticks", [ticks for _, ticks in kept]),
@@ -428,7 +433,11 @@ def _paths(
     ):
         left, right = (
             EncoderStream(
-                wheel, t, np.asarray(ticks, np.int64), np.full(len(t), resolution), "record"
+                wheel,
+                t - start,
+                np.asarray(ticks, np.int64),
+                np.full(len(t), resolution),
+                "record",
             )
             for wheel, (t, _), ticks in zip(("left", "right"), kept, counts)
         )
@@ -437,13 +446,13 @@ def _paths(
         )
     trace = sim.trace
     times = np.asarray(trace.times)
-    keep = times >= start - 1e-9
+    keep = times >= start - origin - 1e-9
     poses = trace.poses()[keep]
     x0, y0, theta0 = poses[0]
     dx, dy = poses[:, 0] - x0, poses[:, 1] - y0
     cos, sin = math.cos(-theta0), math.sin(-theta0)
     truth = PoseTrack(
-        times[keep] - start,
+        times[keep] - (start - origin),
         cos * dx - sin * dy,
         sin * dx + cos * dy,
         np.unwrap(poses[:, 2]) - theta0,

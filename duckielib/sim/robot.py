@@ -10,7 +10,8 @@ the motor's steady speed is ``k * gain * (pwm - pwm_min) / (pwm_max - pwm_min)``
 offset being what overcomes the gearbox's friction (so duty 1 gives k = 27 rad/s). A wheel at
 rest stays at rest below the noise profile's breakaway PWM (static friction). A noise profile
 may give a measured speed curve instead of that linear law (``speed_curve``), and a ground that
-resists turning while the robot rolls (``turning_resistance``, :func:`loaded_speeds`): both
+resists turning while the robot rolls (``turning_scrub``, ``turning_resistance``,
+:func:`loaded_speeds`): both
 wheels' targets then come from both motors. The speed follows its target with a first-order lag
 of time constant :data:`MOTOR_TIME_CONSTANT_S`.
 
@@ -148,15 +149,25 @@ def steady_speed(curve: Sequence[Tuple[float, float]], duty: float) -> float:
     return s0 + (s1 - s0) * (duty - d0) / (d1 - d0)
 
 
-def loaded_speeds(left: float, right: float, turning: float) -> Tuple[float, float]:
+def loaded_speeds(
+    left: float, right: float, turning: float, scrub: float = 0.0, width: float = 1.0
+) -> Tuple[float, float]:
     """The wheels' steady speeds (rad/s) on the ground, from the speeds the motors alone give.
 
-    The ground resists turning while the robot rolls: half the wheels' speed difference is
-    divided by ``1 + turning * |mean speed|``. On an arc the slow wheel is dragged along by the
-    fast one; turning in place is not slowed.
+    The ground resists turning while the robot rolls. First the tyres' scrub takes up to
+    ``scrub`` rad/s off half the wheels' speed difference d: ``scrub * tanh(d / width)``, so a
+    small difference keeps only ``1 - scrub / width`` of itself and a large one loses
+    ``scrub``. It acts in full while the robot rolls more than it spins (its mean wheel speed at
+    least half the difference), and in proportion below: turning on the spot is not slowed.
+    Then what is left is divided by ``1 + turning * |mean speed|``. On an arc the slow wheel is
+    dragged along by the fast one.
     """
     mean = 0.5 * (left + right)
-    half_difference = 0.5 * (right - left) / (1.0 + turning * abs(mean))
+    half_difference = 0.5 * (right - left)
+    if scrub and mean:
+        rolling = min(1.0, abs(mean) / abs(half_difference)) if half_difference else 1.0
+        half_difference -= scrub * rolling * math.tanh(half_difference / width)
+    half_difference /= 1.0 + turning * abs(mean)
     return mean - half_difference, mean + half_difference
 
 
@@ -308,14 +319,22 @@ class Robot:
         self.left = Motor(config, noise.left_gain, breakaway, alpha, curve)
         self.right = Motor(config, noise.right_gain, breakaway, alpha, right_curve)
         self._turning = noise.turning_resistance
+        self._scrub = noise.turning_scrub
+        self._scrub_width = noise.scrub_width
 
     def drive(self) -> Tuple[float, float]:
         """Advance both motors by one step and aim the tyres; return the wheel speeds in rad/s.
 
         Call it just before stepping the space.
         """
-        if self._turning:
-            left, right = loaded_speeds(self.left.target(), self.right.target(), self._turning)
+        if self._turning or self._scrub:
+            left, right = loaded_speeds(
+                self.left.target(),
+                self.right.target(),
+                self._turning,
+                self._scrub,
+                self._scrub_width,
+            )
             left = self.left.follow(left)
             right = self.right.follow(right)
         else:

@@ -93,12 +93,20 @@ def _drives(
     return np.where(live, np.copysign(speed, duties), 0.0), pwm
 
 
-def _loaded(left: np.ndarray, right: np.ndarray, turning: float) -> Tuple[np.ndarray, np.ndarray]:
+def _loaded(
+    left: np.ndarray, right: np.ndarray, ground: Tuple[float, float, float]
+) -> Tuple[np.ndarray, np.ndarray]:
     """:func:`~duckielib.sim.robot.loaded_speeds`, for arrays."""
-    if not turning:
+    turning, scrub, width = ground
+    if not (turning or scrub):
         return left, right
     mean = 0.5 * (left + right)
-    half = 0.5 * (right - left) / (1.0 + turning * np.abs(mean))
+    half = 0.5 * (right - left)
+    if scrub:
+        spin = np.abs(half)
+        rolling = np.minimum(1.0, np.abs(mean) / np.where(spin > 0, spin, 1.0))
+        half = half - scrub * np.where(spin > 0, rolling, 0.0) * np.tanh(half / width)
+    half = half / (1.0 + turning * np.abs(mean))
     return mean - half, mean + half
 
 
@@ -106,7 +114,7 @@ def _speeds_with_breakaway(
     targets: Tuple[np.ndarray, np.ndarray],
     pwms: Tuple[np.ndarray, np.ndarray],
     breakaway: int,
-    turning: float,
+    ground: Tuple[float, float, float],
     alpha: float,
 ) -> Tuple[np.ndarray, np.ndarray]:
     """Each step's wheel speeds when a wheel at rest needs the breakaway PWM (step by step)."""
@@ -114,6 +122,7 @@ def _speeds_with_breakaway(
     out = (np.empty(count), np.empty(count))
     drive_l, drive_r = targets[0].tolist(), targets[1].tolist()
     pwm_l, pwm_r = pwms[0].tolist(), pwms[1].tolist()
+    turning, scrub, width = ground
     left = right = 0.0
     for step in range(count):
         target_l = (
@@ -122,8 +131,8 @@ def _speeds_with_breakaway(
         target_r = (
             0.0 if pwm_r[step] < breakaway and -REST_SPEED < right < REST_SPEED else drive_r[step]
         )
-        if turning:
-            target_l, target_r = loaded_speeds(target_l, target_r, turning)
+        if turning or scrub:
+            target_l, target_r = loaded_speeds(target_l, target_r, turning, scrub, width)
         left += (target_l - left) * alpha
         right += (target_r - right) * alpha
         out[0][step] = left
@@ -149,13 +158,13 @@ def counted_angles(
     drive_l, pwm_l = _drives(steps.left, profile.left_gain, profile.speed_curve, config)
     drive_r, pwm_r = _drives(steps.right, profile.right_gain, right_curve, config)
     breakaway = config.pwm_min if profile.breakaway_pwm is None else profile.breakaway_pwm
-    turning = profile.turning_resistance
+    ground = (profile.turning_resistance, profile.turning_scrub, profile.scrub_width)
     if breakaway > config.pwm_min:
         speeds = _speeds_with_breakaway(
-            (drive_l, drive_r), (pwm_l, pwm_r), breakaway, turning, alpha
+            (drive_l, drive_r), (pwm_l, pwm_r), breakaway, ground, alpha
         )
     else:
-        targets = _loaded(drive_l, drive_r, turning)
+        targets = _loaded(drive_l, drive_r, ground)
         speeds = tuple(lfilter([alpha], [1.0, alpha - 1.0], target) for target in targets)
     counted = []
     for speed, duties in zip(speeds, (steps.left, steps.right)):

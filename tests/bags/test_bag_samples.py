@@ -52,9 +52,7 @@ def test_the_other_robots_mission_calibrates_back_to_the_sample_robot():
     assert report.states_in_order
     fitted = calibrate_bag(bag).profile
     assert fitted.right_gain == pytest.approx(CALIBRATION_SAMPLE_ROBOT["right_gain"], rel=0.03)
-    assert fitted.turning_resistance == pytest.approx(
-        CALIBRATION_SAMPLE_ROBOT["turning_resistance"], rel=0.1
-    )
+    assert fitted.turning_scrub == pytest.approx(CALIBRATION_SAMPLE_ROBOT["turning_scrub"], rel=0.1)
 
 
 def test_an_unknown_sample_is_named_with_those_there_are():

@@ -582,8 +582,9 @@ CLAIMS["06_driving"] = [
         says="Does the true sideways drift depend on the speed?",
         printed=r"cm along the heading \(the most: [+-][\d.]+ cm\), (?P<side_slowest>[+-][\d.]+) "
         r"to (?P<side_fastest>[+-][\d.]+) cm to the side",
-        holds=lambda side_slowest, side_fastest: abs(side_fastest) < abs(side_slowest) / 2,
-        meaning="it does: the true drift at the fastest speed is under half that at the slowest",
+        holds=lambda side_slowest, side_fastest: abs(side_fastest - side_slowest) < 1,
+        meaning="it hardly does: the true drift at the fastest and at the slowest speed are "
+        "within 1 cm",
     ),
     Claim(
         says="the stop is only decided at the next odometry update and loop cycle",
@@ -854,29 +855,34 @@ CLAIMS["07_control"] = [
     ),
     Claim(
         says="**PID**: the D term brakes the fast P controller before the target: it settles "
-        "first, without going past, within a degree of the target by the odometry and really",
+        "first and goes past by far less, ending within 2° of the target by the odometry and "
+        "really",
         printed=_CONTROL_STEPS,
         holds=lambda **n: (
             n["pid_settle"] < n["p16_settle"]
-            and n["pid_past"] < 0.5
-            and abs(n["pid_odometry"]) < 1
-            and abs(n["pid_really"]) < 1
+            and n["pid_past"] < n["p16_past"] / 3
+            and abs(n["pid_odometry"]) < 2
+            and abs(n["pid_really"]) < 2
         ),
-        meaning="the PID settles before P, kp = 16 (the others never do), without going past, "
-        "within 1° by the odometry and really",
+        meaning="the PID settles before P, kp = 16 (the others never do), goes past by under a "
+        "third as much, within 2° by the odometry and really",
     ),
     Claim(
-        says="the controller that went past the target and came back (P, kp = 16) ends with the "
-        "odometry and the truth a few degrees apart; the others end where their odometry says, "
-        "within a degree",
+        says="the controllers that went past the target and came back end with the odometry and "
+        "the truth apart, the more so the further they went past (P, kp = 16: several degrees); "
+        "the two that never went past end where their odometry says, within a degree",
         printed=_CONTROL_STEPS,
         holds=lambda **n: (
-            abs(n["p16_odometry"] - n["p16_really"]) > 2
+            abs(n["p16_odometry"] - n["p16_really"]) > 3
+            and n["pid_past"] < n["p16_past"]
+            and abs(n["pid_odometry"] - n["pid_really"])
+            < abs(n["p16_odometry"] - n["p16_really"])
+            and n["p2_past"] == n["pi_past"] == 0
             and abs(n["p2_odometry"] - n["p2_really"]) < 1
             and abs(n["pi_odometry"] - n["pi_really"]) < 1
-            and abs(n["pid_odometry"] - n["pid_really"]) < 1
         ),
-        meaning="P, kp = 16 ends with odometry and truth over 2° apart; the others within 1°",
+        meaning="P, kp = 16 ends with odometry and truth over 3° apart, the PID (past by less) "
+        "closer; P, kp = 2 and PI never go past and end within 1°",
     ),
     Claim(
         says="At a small kp the turn is slow: what does the integral do during all that time?",
@@ -900,11 +906,11 @@ CLAIMS["07_control"] = [
     ),
     Claim(
         says="by the odometry the robot went through every corner and ended about 2 cm from the "
-        "last one, but really it ended tens of centimetres away, and it was already far from the "
+        "last one, but really it ended more than a metre away, and it was already far from the "
         "first corner when the odometry reached it",
         printed=_CONTROL_CORNERS,
-        holds=lambda really, odometry, first: odometry < 3 and really > 20 and first > 10,
-        meaning="odometry within 3 cm of the last corner, the truth over 20 cm away, and over "
+        holds=lambda really, odometry, first: odometry < 4 and really > 100 and first > 10,
+        meaning="odometry within 4 cm of the last corner, the truth over 1 m away, and over "
         "10 cm from the first corner when the odometry reached it",
     ),
     Claim(
@@ -937,19 +943,23 @@ CLAIMS["07_control"] = [
         "coasting.",
         printed=_CONTROL_OPEN_CLOSED,
         holds=lambda **n: (
-            n["open_turn"] > 5 and n["closed_turn"] < 1 and n["closed_really"] < n["open_really"]
+            n["open_turn"] > 5
+            and n["closed_turn"] < 1
+            and n["closed_odometry"] < n["open_odometry"]
         ),
-        meaning="closed loop, the turn ends within 1° (open loop over 5°) and the straight closer",
+        meaning="closed loop, the turn ends within 1° (open loop over 5°) and the straight closer "
+        "to its goal by the odometry, the measurement",
     ),
     Claim(
         says="Gentle gains that settle without overshoot keep the odometry honest",
         printed=_CONTROL_STEPS,
         holds=lambda **n: (
-            abs(n["p16_odometry"] - n["p16_really"]) > 2
-            and n["pid_past"] < 0.5
-            and abs(n["pid_odometry"] - n["pid_really"]) < 1
+            abs(n["p16_odometry"] - n["p16_really"]) > 3
+            and n["pid_past"] < n["p16_past"] / 3
+            and abs(n["pid_odometry"] - n["pid_really"]) < 2
         ),
-        meaning="the overshooting P ends with odometry and truth over 2° apart, the PID within 1°",
+        meaning="the overshooting P ends with odometry and truth over 3° apart, the PID (past by "
+        "under a third as much) within 2°",
     ),
     Claim(
         says="The controller can only be as good as its measurement.",
@@ -1118,10 +1128,10 @@ CLAIMS["09_mission"] = [
         meaning="after the square the realistic robot's true heading is over 10 degrees short",
     ),
     Claim(
-        says="by odometry its circle is more than twice as wide as asked",
+        says="by odometry its circle is wider than asked",
         printed=_REALISTIC_09,
-        holds=lambda **n: n["across"] > 2 * n["asked"],
-        meaning="the realistic robot's circle is over twice the asked diameter by odometry",
+        holds=lambda **n: n["across"] > 1.1 * n["asked"],
+        meaning="the realistic robot's circle is over 10 % wider than asked by odometry",
     ),
     Claim(
         says="real robot even leaves the mat and drives its circle partly off it",
@@ -1131,17 +1141,18 @@ CLAIMS["09_mission"] = [
         "circle",
     ),
     Claim(
-        says="It ends far from the start while its odometry believes it is home.",
+        says="It ends far from the start while its odometry believes it is within a few "
+        "centimetres of home.",
         printed=_REALISTIC_09,
-        holds=lambda **n: n["home"] > 10 and n["believed"] < 5,
-        meaning="the realistic robot ends over 10 cm from the start, its odometry within 5 cm",
+        holds=lambda **n: n["home"] > 10 and n["believed"] < 8,
+        meaning="the realistic robot ends over 10 cm from the start, its odometry within 8 cm",
     ),
     Claim(
-        says="The realistic run took far longer than the ideal one, and most of the extra time "
-        "went into the turns on the spot.",
-        printed=_TURNS_09,
-        holds=lambda **n: n["turns"] - n["ideal_turns"] > (n["total"] - n["ideal_total"]) / 2,
-        meaning="over half of the realistic run's extra time is spent turning on the spot",
+        says="`MIN_TURN_RATE` is a little above it",
+        printed=_SPIN_09,
+        holds=lambda **n: n["edge"] < 1.2 <= n["edge"] + 0.3,
+        meaning="MIN_TURN_RATE (1.2 rad/s) is above the slowest turn that moved the realistic "
+        "robot, by 0.3 rad/s at most",
     ),
     Claim(
         says="the realistic robot does not turn at all below about 1 rad/s",
@@ -1156,12 +1167,14 @@ CLAIMS["09_mission"] = [
         meaning="the ideal robot turns at the smallest command of the table",
     ),
     Claim(
-        says="That is where the realistic run's turns spent their time, asking for less than the "
-        "robot needs for most of it, and one of them ran into the time limit",
+        says="your turns on the spot took about as long on the realistic robot as on the ideal "
+        "one, and only their last degrees, within three tolerances of the goal, asked for less",
         printed=_TURNS_09,
-        holds=lambda **n: n["weak"] > n["turns"] / 2 and n["longest"] >= 29.5,
-        meaning="over half of the realistic turns' time asks for less than the dead band's edge, "
-        "and the longest turn lasts the 30 s time limit",
+        holds=lambda **n: (
+            n["turns"] < 1.3 * n["ideal_turns"] and n["weak"] < n["turns"] / 3 and n["longest"] < 5
+        ),
+        meaning="the realistic run spends under 1.3 times the ideal run's time turning on the "
+        "spot, no turn lasts 5 s, and under a third of it asks for less than the dead band's edge",
     ),
     Claim(
         says="it takes a second or two instead of many, and ends within the tolerance all the same",
@@ -1433,16 +1446,16 @@ CLAIMS["10_bag_analysis"] += [
         meaning="the calibration prints its turn ratio as nan",
     ),
     Claim(
-        says="headings that agree, paths that end together",
+        says="headings that agree, paths that end far closer",
         printed=rf"realistic: simulated over real travel [^\n]*the paths end "
         rf"(?P<realistic_gap>{_NUMBER}) cm apart\n\s*my_robot: simulated over real travel "
         rf"[^\n]*heading change (?P<sim>{_NUMBER}) rad against (?P<real>{_NUMBER}); the paths "
         rf"end (?P<gap>{_NUMBER}) cm apart",
         holds=lambda realistic_gap, sim, real, gap: (
-            abs(sim - real) < 0.2 and gap < 5 and realistic_gap > 4 * gap
+            abs(sim - real) < 0.2 and gap < 30 and realistic_gap > 4 * gap
         ),
         meaning="on the calibrated robot the heading changes agree within 0.2 rad and the paths "
-        "end within 5 cm, four times closer than on the realistic one",
+        "end within 30 cm, four times closer than on the realistic one or more",
     ),
 ]
 

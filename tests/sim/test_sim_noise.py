@@ -64,6 +64,9 @@ def test_unknown_parameter_names_the_known_ones():
         {"speed_curve": "fast"},
         {"turning_resistance": -0.5},
         {"turning_resistance": math.nan},
+        {"turning_scrub": -0.5},
+        {"turning_scrub": 1.0},  # as large as its width (1 by default): turns the robot back
+        {"scrub_width": 0.0},
     ],
 )
 def test_impossible_values_are_rejected(changes):

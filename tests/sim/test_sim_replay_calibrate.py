@@ -9,26 +9,28 @@ import numpy as np
 import pytest
 
 from duckielib.bags import Bag, BagWriter
+from duckielib.config import DB21
 from duckielib.errors import BagError
 from duckielib.messages import Header, WheelEncoderStamped, WheelsCmdStamped
 from duckielib.rostime import Time
 from duckielib.sim import NoiseProfile, Simulator, World
 from duckielib.sim.calibrate import calibrate_bag, steady_speeds
 from duckielib.sim.replay import replay_bag
-from duckielib.sim.robot import steady_speed
+from duckielib.sim.robot import loaded_speeds, steady_speed
 from duckielib.tools.runner import run_mission
 
 VEH = "/ente/"
-#: An unusual robot: a wide dead band, a curve that bends, a right motor 15 % weaker, and a
-#: ground that resists turns twice as much as the realistic one's.
+#: An unusual robot: a wide dead band, a curve that bends, a right motor 15 % weaker, and
+#: tyres that scrub less than the realistic ones (a small difference of the wheels' speeds
+#: keeps 44 % of itself instead of 9 %).
 TRUE_CURVE = ((0.18, 0.0), (0.5, 6.0), (1.0, 13.0))
-TRUE_TURNING = 1.3
+TRUE_SCRUB = 4.0
 UNUSUAL = NoiseProfile.realistic(
     name="unusual",
     speed_curve=TRUE_CURVE,
     right_gain=0.85,
     breakaway_pwm=None,
-    turning_resistance=TRUE_TURNING,
+    turning_scrub=TRUE_SCRUB,
 )
 #: Held commands (left, right, seconds): speeds forward, a turn in place, and arcs.
 DRIVE = [
@@ -92,12 +94,20 @@ def test_a_mission_bag_replays_into_its_own_profile_tick_for_tick(tmp_path, caps
     figures = ideal.figures()
     assert figures["noise"] == "ideal"
     assert set(figures) >= {"travel_ratio_left", "travel_ratio_right", "tick_rate_rms"}
-    # The mission comes back to its heading: its net turn is a few ticks of thousands, and a
+    # The mission turns one full circle more clockwise than counter-clockwise (its circle).
+    turn = figures["turn_ticks_real"] * 2 * math.pi * DB21.radius / 135 / DB21.baseline
+    assert turn == pytest.approx(-2 * math.pi, abs=0.5)
+    # The ideal robot's tyres let the whole of a speed difference turn it: on the realistic
+    # robot's commands it turns several times as far.
+    assert figures["turn_ratio"] > 3.0
+    # A run that comes back to its heading: a net turn of a few ticks of thousands, and a
     # ratio of two small numbers would say nothing.
-    assert abs(figures["turn_ticks_real"]) < 0.05 * report.left.real_travel
-    assert math.isnan(figures["turn_ratio"])
-    bag = str(run.folder / "mission.bag")
-    assert main(["sim", "replay", bag, "--noise", "ideal", "--seed", "4", "--json"]) == 0
+    there_and_back = [(0.3, 0.5, 2.0), (0.0, 0.0, 1.0), (0.5, 0.3, 2.0), (0.0, 0.0, 1.0)]
+    bag = str(record_drive(tmp_path / "back.bag", "realistic", drive=there_and_back))
+    back = replay_bag(bag, noise="ideal").figures()
+    assert abs(back["turn_ticks_real"]) < 0.05 * back["real_travel_left"]
+    assert math.isnan(back["turn_ratio"])
+    assert main(["sim", "replay", bag, "--noise", "ideal", "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["turn_ratio"] is None  # JSON has no NaN
 
 
@@ -110,13 +120,24 @@ def _speeds(profile, duty):
     )
 
 
+def _on_ground(profile, duty):
+    """A profile's steady (left, right) wheel speeds for a duty on both wheels, the ground's
+    drag included: what the encoders of a robot driving straight see."""
+    return loaded_speeds(
+        *_speeds(profile, duty),
+        profile.turning_resistance,
+        profile.turning_scrub,
+        profile.scrub_width,
+    )
+
+
 def assert_calibrated_back(fitted, duties):
     for duty in duties:
         for wheel, got, true in zip(
             ("left", "right"), _speeds(fitted, duty), _speeds(UNUSUAL, duty)
         ):
             assert got == pytest.approx(true, rel=0.05), (duty, wheel)
-    assert fitted.turning_resistance == pytest.approx(TRUE_TURNING, rel=0.05)
+    assert fitted.turning_scrub == pytest.approx(TRUE_SCRUB, rel=0.05)
 
 
 def test_a_bag_of_held_commands_calibrates_an_unusual_robot_back_within_5_percent(tmp_path):
@@ -161,7 +182,10 @@ def test_a_bag_with_one_speed_calibrates_and_says_what_it_could_not_see(tmp_path
     bag = record_drive(tmp_path / "one.bag", UNUSUAL, drive=[(0.4, 0.4, 3.0), (0.0, 0.0, 1.0)])
     calibration = calibrate_bag(bag)
     assert calibration.replay.left.travel_ratio == pytest.approx(1.0, abs=0.03)
-    assert _speeds(calibration.profile, 0.4)[0] == pytest.approx(_speeds(UNUSUAL, 0.4)[0], rel=0.05)
+    # One speed straight ahead cannot tell a weaker right motor from tyres that let less of
+    # the difference through; the wheels' speeds on the ground are what the bag shows.
+    for got, true in zip(_on_ground(calibration.profile, 0.4), _on_ground(UNUSUAL, 0.4)):
+        assert got == pytest.approx(true, rel=0.03)
     assert calibration.notes == (
         "The wheels are never driven at different commands, so nothing says how the ground "
         "resists turning: the realistic robot's value is kept.",
@@ -249,7 +273,7 @@ def test_the_realistic_profile_gives_the_real_robots_figures_and_their_drift(tmp
         for ratio in row.ratio():
             assert 0.9 < ratio < 1.1, row
     arc = {row.what: row for row in motor_table("realistic")}["arc, 0.18 inner, 0.62 outer"]
-    alone = {row.what: row for row in motor_table(NoiseProfile.realistic(turning_resistance=0))}
+    alone = {row.what: row for row in motor_table(NoiseProfile.realistic(turning_scrub=0))}
     assert arc.simulated[0] > 2.5 * alone["arc, 0.18 inner, 0.62 outer"].simulated[0]
     # The mission with the reference solution finishes, and ends tens of centimetres from its
     # start by the ground truth while its own odometry believes it is home, as real robots did.
@@ -257,7 +281,7 @@ def test_the_realistic_profile_gives_the_real_robots_figures_and_their_drift(tmp
     summary = run.summary
     assert summary["distance_to_start"] > 0.2
     odometry_end = summary["final_pose_odometry"]
-    assert math.hypot(odometry_end[0] - 0.32, odometry_end[1] - 0.32) < 0.05
+    assert math.hypot(odometry_end[0] - 0.32, odometry_end[1] - 0.32) < 0.08
     # The ideal robot's odometry agrees with the truth over the whole mission.
     ideal = run_mission(out=tmp_path / "ideal", noise="ideal", seed=0, animation=False)
     assert ideal.summary["odometry_error"]["distance"] < 0.01
@@ -277,7 +301,7 @@ def test_the_calibration_drive_recorded_on_the_realistic_robot_calibrates_back_t
     fitted = calibration.profile
     # The fitted motors have no static friction (a wheel at rest starts at any command above
     # the dead band); the realistic one has, and the fit takes part of it as the ground's.
-    assert fitted.turning_resistance == pytest.approx(realistic.turning_resistance, rel=0.15)
+    assert fitted.turning_scrub == pytest.approx(realistic.turning_scrub, rel=0.15)
     for duty in (0.3, 0.4, 0.5):
         for got, true in zip(_speeds(fitted, duty), _speeds(realistic, duty)):
             assert got == pytest.approx(true, rel=0.05), duty
@@ -293,7 +317,9 @@ def test_the_sample_calibration_bag_fits_its_robot_and_the_realistic_one_does_no
     bag = sample_bag("calibration_drive")
     calibration = calibrate_bag(bag)
     assert calibration.profile.right_gain == pytest.approx(0.93, rel=0.02)
-    assert calibration.profile.turning_resistance == pytest.approx(0.9, rel=0.15)
+    assert calibration.profile.turning_scrub == pytest.approx(
+        CALIBRATION_SAMPLE_ROBOT["turning_scrub"], rel=0.05
+    )
     # Its dead band: no held command below 0.15 tells where it ends, and the fit stays below.
     assert 0.08 < calibration.profile.speed_curve[0][0] < 0.15
     assert steady_speed(calibration.profile.speed_curve, 0.4) == pytest.approx(
@@ -313,12 +339,12 @@ def test_without_arcs_the_straight_runs_and_turns_in_place_still_tell_the_wheels
     bag = record_drive(tmp_path / "no_arcs.bag", UNUSUAL, drive=straight_and_in_place)
     calibration = calibrate_bag(bag)
     assert calibration.profile.right_gain == pytest.approx(0.85, rel=0.03)
-    assert calibration.profile.turning_resistance == pytest.approx(TRUE_TURNING, rel=0.15)
+    assert calibration.profile.turning_scrub == pytest.approx(TRUE_SCRUB, rel=0.15)
     # Straight runs alone cannot tell the two apart: the realistic robot's value is kept.
     only_straight = [step for step in DRIVE if step[0] == step[1]]
     straight = calibrate_bag(record_drive(tmp_path / "straight.bag", UNUSUAL, drive=only_straight))
-    assert straight.profile.turning_resistance == pytest.approx(
-        NoiseProfile.realistic().turning_resistance, rel=0.05
+    assert straight.profile.turning_scrub == pytest.approx(
+        NoiseProfile.realistic().turning_scrub, rel=0.05
     )
     assert "nothing says how the ground resists turning" in straight.notes[-1]
 
@@ -332,9 +358,10 @@ def test_a_replay_says_where_odometry_puts_the_robot_not_only_how_far_the_wheels
     bag = record_drive(tmp_path / "unusual.bag", UNUSUAL)
     solution = load_solution(None, required=ODOMETRY_PARTS)
     same = replay_bag(bag, noise=UNUSUAL, seed=3, solution=solution).figures()
-    # The bag's own robot: the same ticks, so the same headings and the same final pose.
+    # The bag's own robot: the same ticks (a wheel's count may cross a slot a step apart, a
+    # tick at most), so the same headings and the same final pose.
     assert same["heading_ratio"] == 1.0
-    assert same["final_gap_m"] == 0.0
+    assert same["final_gap_m"] <= 0.0002
     assert same["heading_change_real_rad"] == same["heading_change_sim_rad"] != 0.0
     # The ideal robot drives the same commands: its wheels turn more, and its turn in place
     # and its arcs turn it elsewhere. The figures say by how much, and odometry agrees with
@@ -356,6 +383,14 @@ def test_a_replay_says_where_odometry_puts_the_robot_not_only_how_far_the_wheels
     assert float(lines["heading_gap_rad"]) == ideal["heading_gap_rad"]
     assert float(lines["final_gap_m"]) == ideal["final_gap_m"]
     assert plot.read_bytes().startswith(b"\x89PNG")
+    # A real robot's bag is stamped in seconds since 1970: the three tracks the plot draws
+    # still share one time axis, from the first command to the end of the drive.
+    epoch = record_drive(tmp_path / "epoch.bag", UNUSUAL, start=1_741_836_000.0)
+    paths = replay_bag(epoch, noise=UNUSUAL, seed=3, solution=solution).paths
+    seconds = sum(step[2] for step in DRIVE)
+    for track in (paths.real, paths.sim, paths.truth):
+        assert -0.5 < track.t[0] < 0.5, track.label
+        assert seconds - 2 < track.t[-1] < seconds + 0.5, track.label
 
 
 def test_a_robot_clock_a_minute_ahead_is_said_and_the_times_aligned(tmp_path, capsys):

@@ -10,7 +10,8 @@ import pytest
 from duckielib.config import DB21
 from duckielib.errors import ConfigError, SimulationError
 from duckielib.sim import NoiseProfile, Simulator, World, pwm_from_duty
-from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S
+from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, loaded_speeds
+from duckielib.sim.wheels import _loaded
 
 BIG = World(tiles_x=8, tiles_y=8)
 
@@ -156,15 +157,19 @@ def test_realistic_tyres_slip_at_high_acceleration_only():
 
 
 def test_unequal_wheels_veer_towards_the_weaker_one():
-    sim = Simulator(seed=3, noise="realistic", world=BIG, start_pose=(0.5, 2.3, 0.0))
-    sim.set_wheel_duties(0.5, 0.5)
-    sim.run_until(4.0)
-    # Turned clockwise (the right wheel is weaker), less once rolling: the ground resists turns.
-    assert 6.1 < sim.pose.theta < 2 * math.pi - 0.03
-    trimmed = Simulator(seed=3, noise="realistic", world=BIG, start_pose=(0.5, 2.3, 0.0))
-    trimmed.set_wheel_duties(0.5, 0.5 / 0.97)
-    trimmed.run_until(4.0)
-    assert abs(math.remainder(trimmed.pose.theta, math.tau)) < 0.01
+    def turned(noise, right=0.5):
+        sim = Simulator(seed=3, noise=noise, world=BIG, start_pose=(0.5, 2.3, 0.0))
+        sim.set_wheel_duties(0.5, right)
+        sim.run_until(4.0)
+        return math.remainder(sim.pose.theta, math.tau)
+
+    # Turned clockwise (the right wheel is weaker), but the tyres' scrub lets only 9 % of the
+    # motors' difference through: a tenth of what the motors alone would turn it.
+    veer = turned("realistic")
+    alone = turned(NoiseProfile.realistic(turning_scrub=0.0))
+    assert -0.05 < veer < -0.01
+    assert 0.05 < veer / alone < 0.15
+    assert abs(turned("realistic", right=0.5 / 0.97)) < 0.005  # trimmed: a fifth of it
 
 
 def test_theta_stays_in_zero_to_two_pi():
@@ -222,3 +227,35 @@ def test_motor_time_constant_is_settable():
     assert instant.wheel_speeds == (27.0, 27.0)
     with pytest.raises(ConfigError, match="motor_time_constant_s"):
         Simulator(motor_time_constant_s=-0.1)
+
+
+def test_the_tyres_scrub_takes_most_of_a_small_difference_and_a_set_amount_of_a_large_one():
+    scrub, width = 6.45, 7.12
+    # Rolling at 5 rad/s: a difference of 0.2 rad/s keeps 1 - scrub / width of itself (9 %).
+    left, right = loaded_speeds(4.9, 5.1, 0.0, scrub, width)
+    assert left + right == pytest.approx(10.0)
+    assert (right - left) / 0.2 == pytest.approx(1 - scrub / width, rel=0.01)
+    # A large difference (the arc 2 / 10 rad/s) keeps more of itself: about 19 %.
+    left, right = loaded_speeds(2.0, 10.0, 0.0, scrub, width)
+    assert 0.5 * (right - left) == pytest.approx(4.0 - scrub * math.tanh(4.0 / width))
+    assert 0.15 < (right - left) / 8.0 < 0.25
+    # Turning on the spot is not slowed; a pivot on one wheel rolls as much as it spins.
+    assert loaded_speeds(-3.0, 3.0, 0.0, scrub, width) == (-3.0, 3.0)
+    left, right = loaded_speeds(0.0, 4.0, 0.0, scrub, width)
+    assert right - left == pytest.approx(4.0 - 2 * scrub * math.tanh(2.0 / width))
+    # Never turned the other way, and the motors' speeds alone without a scrub.
+    for difference in np.linspace(-12.0, 12.0, 49):
+        left, right = loaded_speeds(6.0 - difference / 2, 6.0 + difference / 2, 0.0, scrub, width)
+        assert (right - left) * difference >= 0
+    assert loaded_speeds(2.0, 10.0, 0.0) == (2.0, 10.0)
+
+
+def test_the_wheels_arrays_scrub_as_the_simulators_wheels_do():
+    rng = np.random.default_rng(5)
+    left, right = rng.uniform(-12, 12, 500), rng.uniform(-12, 12, 500)
+    left[:50] = -right[:50]  # on the spot
+    left[50:60] = right[50:60]  # straight
+    arrays = _loaded(left, right, (0.4, 6.45, 7.12))
+    for k in range(500):
+        expected = loaded_speeds(left[k], right[k], 0.4, 6.45, 7.12)
+        assert (arrays[0][k], arrays[1][k]) == pytest.approx(expected, abs=1e-12)
