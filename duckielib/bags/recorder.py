@@ -25,6 +25,7 @@ import atexit
 import collections
 import contextlib
 import itertools
+import re
 import threading
 import time
 from pathlib import Path
@@ -99,6 +100,8 @@ class BagRecorder:
         compression: ``"none"`` or ``"bz2"``.
         flush_interval: the longest wall-clock time, in seconds, recorded messages wait in
             memory before they are written to disk.
+        exclude: with ``topics`` None, a regular expression of topics not to record (whole
+            names), as ``rosbag record -a -x``.
 
     Attributes:
         path: the finished bag's path.
@@ -118,8 +121,10 @@ class BagRecorder:
         graph: Optional[Graph] = None,
         compression: str = "none",
         flush_interval: float = 1.0,
+        exclude: Optional[str] = None,
     ) -> None:
         self.path = Path(path)
+        self._exclude = None if exclude is None else re.compile(exclude)
         self.active_path = self.path.with_name(self.path.name + ".active")
         if self.path.exists():
             raise BagError(f"{self.path} exists already; choose another name or delete it first.")
@@ -180,7 +185,7 @@ class BagRecorder:
         if self.closed:
             return
         for topic, record in list(self.graph.topics.items()):
-            if record.publishers:
+            if record.publishers and not (self._exclude and self._exclude.fullmatch(topic)):
                 self._subscribe(topic)
         self.graph.schedule(self.graph.now_ns + _DISCOVERY_PERIOD_NS, self._discover)
 

@@ -280,9 +280,14 @@ def add_package(package: str, folder: Union[str, Path]) -> types.ModuleType:
         if package in _FOLDERS and _FOLDERS[package] == folder:
             return cast(types.ModuleType, globals()[package])
         if package in _FOLDERS:
+            # A copy of the same package (the project cloned again, run from another folder)
+            # defines the same types: nothing to add.
+            if _same_definitions(_read_package(package, folder)):
+                return cast(types.ModuleType, globals()[package])
             raise MessageDefinitionError(
-                f"The package {package} is defined already (in {_FOLDERS[package]}); "
-                "give yours another name."
+                f"The package {package} is defined already (in {_FOLDERS[package]}), with "
+                "other definitions: give yours another name, or restart the kernel to use "
+                "the new ones."
             )
         if not package.isidentifier() or package in globals():
             raise MessageDefinitionError(
@@ -299,6 +304,15 @@ def add_package(package: str, folder: Union[str, Path]) -> types.ModuleType:
         _FOLDERS[package] = folder
         _install_modules(_names_of(specs))
         return cast(types.ModuleType, globals()[package])
+
+
+def _same_definitions(specs: List[_Spec]) -> bool:
+    """Whether every one of ``specs`` is registered already, with the same text."""
+    parts = [part for spec in specs for part in _messages_of(spec)]
+    return bool(parts) and all(
+        part.full_name in REGISTRY.messages and REGISTRY.messages[part.full_name].text == part.text
+        for part in parts
+    )
 
 
 def _messages_of(spec: _Spec) -> List[MessageSpec]:

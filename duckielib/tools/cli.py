@@ -266,6 +266,56 @@ def _mission(args: argparse.Namespace) -> int:
     return 0
 
 
+def _run(args: argparse.Namespace) -> int:
+    from duckielib.tools.project import run_project
+
+    run = run_project(
+        args.path,
+        launcher=args.launcher,
+        noise=args.noise,
+        seed=args.seed,
+        seconds=args.seconds,
+        out=args.out,
+    )
+    print(run.text())
+    return 0
+
+
+def _add_run(commands: argparse._SubParsersAction) -> None:
+    """``duckie run``: a Duckietown project's nodes on the virtual Duckiebot."""
+    run = commands.add_parser(
+        "run",
+        help="run a Duckietown project (its launcher, launch files and nodes, unchanged) on the "
+        "virtual Duckiebot, as dts devel run runs it on the robot",
+    )
+    run.add_argument(
+        "path", help="the project's folder (the one with packages/), a launch file or a node script"
+    )
+    run.add_argument(
+        "-L",
+        "--launcher",
+        default="default",
+        help="the launcher to run, launchers/NAME.sh (default: default)",
+    )
+    run.add_argument(
+        "--noise",
+        default="ideal",
+        type=_noise,
+        help="the simulated robot: ideal (default), realistic, or a profile file",
+    )
+    run.add_argument(
+        "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
+    )
+    run.add_argument(
+        "--seconds",
+        type=_seconds,
+        default=30.0,
+        help="simulated seconds to run at most (default 30)",
+    )
+    run.add_argument("--out", default="runs/project", help="folder for the bag, log, summary")
+    run.set_defaults(handler=_run)
+
+
 def _robot_prepare(args: argparse.Namespace) -> int:
     from duckielib.tools.deploy import prepare
 
@@ -596,6 +646,7 @@ def _parser() -> argparse.ArgumentParser:
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     _add_mission(commands)
+    _add_run(commands)
 
     export = commands.add_parser(
         "export", help="collect the graded functions of your notebooks into one solution module"

@@ -98,6 +98,7 @@ from duckielib.errors import MessageDefinitionError
 module = messages.add_package("once_pkg", "once_pkg")
 print(messages.add_package("once_pkg", "once_pkg") is module, module.msg.Foo._md5sum)
 print(module.srv.CheckResponse(ok=True).ok, "once_pkg/Check" in messages.service_types())
+print(messages.add_package("once_pkg", "copy/once_pkg") is module)  # the same definitions
 for name, folder in [("once_pkg", "elsewhere/once_pkg"), ("std_msgs", "once_pkg")]:
     try:
         messages.add_package(name, folder)
@@ -108,11 +109,14 @@ for name, folder in [("once_pkg", "elsewhere/once_pkg"), ("std_msgs", "once_pkg"
 
 def test_a_package_is_added_once(tmp_path):
     make_package(tmp_path, "once_pkg")
-    make_package(tmp_path / "elsewhere", "once_pkg")
+    make_package(tmp_path / "copy", "once_pkg")
+    other = make_package(tmp_path / "elsewhere", "once_pkg")
+    (other / "msg" / "Bar.msg").write_text("string label\nint32 count\n")
     out = run_python(["-c", ADD_TWICE], cwd=tmp_path)
-    assert out.split("\n")[:4] == [
+    assert out.split("\n")[:5] == [
         f"True {FOO_MD5}",
         "True True",
+        "True",
         "The package once_pkg is defined already",
         "The package std_msgs is defined already",
     ]

@@ -1,0 +1,148 @@
+"""Whole Duckietown projects run unchanged by ``duckie run``, from any working folder.
+
+``projects/square_project`` is written in the students' layout (Duckietown's template): two
+catkin packages under ``packages/``, one with a Python package under ``include/`` (installed
+by its ``setup.py``, as ``catkin_python_setup`` does), the other with its own ``msg/`` and
+``srv/`` and the node that answers the service; launch files with arguments, a group in the
+robot's namespace, an include with arguments, parameters chosen by ``if``/``unless``, a
+``rosparam`` file and a remapping; and launchers that ``roslaunch`` and ``rosrun``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import sys
+from pathlib import Path
+
+import pytest
+
+from duckielib.bags import Bag, pose_tracks
+from duckielib.ros import uninstall_modules
+from duckielib.tools.cli import main
+from duckielib.tools.project import ProjectError, Workspace, launched_nodes, run_project
+
+PROJECT = Path(__file__).resolve().parent / "projects" / "square_project"
+
+
+@pytest.fixture(autouse=True)
+def clean_imports(monkeypatch):
+    monkeypatch.setenv("VEHICLE_NAME", "duckiebot")
+    before = set(sys.modules)
+    yield
+    uninstall_modules()
+    for name in set(sys.modules) - before:
+        if name.split(".")[0] in ("rospy", "duckietown_msgs", "motion_msgs", "motion_control"):
+            del sys.modules[name]
+
+
+def travelled(bag_path):
+    """How far the robot really drove in a run (m), from its bag's true poses."""
+    (truth,) = [t for t in pose_tracks(Bag(bag_path), "record") if "ground_truth" in t.label]
+    return math.hypot(truth.x[-1] - truth.x[0], truth.y[-1] - truth.y[0])
+
+
+@pytest.mark.parametrize(
+    "where", [".", "packages", "packages/motion_control", "packages/motion_msgs/src", "elsewhere"]
+)
+def test_the_project_runs_unchanged_from_any_working_folder(where, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path if where == "elsewhere" else PROJECT / where)
+    run = run_project(PROJECT, out=tmp_path / "run", seconds=20)
+    # The launcher roslaunches square.launch with side:=0.6; the launch file's group puts both
+    # nodes under the robot, its include starts the side server with that side, and the
+    # driver reads its speed (unless fast) and its gains (rosparam) and asks the server.
+    assert run.nodes == {
+        "/duckiebot/side_server": "running, stopped when the run ended",
+        "/duckiebot/square_driver": "ended (required: the run ended with it)",
+    }
+    log = (tmp_path / "run" / "log.txt").read_text()
+    assert "[/duckiebot/side_server]: side of a square asked" in log
+    assert "[/duckiebot/square_driver]: drove 0.60 m at 0.2 m/s" in log
+    # Its own message type recorded, its remapped commands driven by the robot: 0.6 m.
+    assert run.topics["/duckiebot/square_driver/progress"] >= 25
+    assert run.topics["/duckiebot/car_cmd_switch_node/cmd"] >= 25
+    assert "/duckiebot/car_cmd" not in run.topics
+    assert travelled(run.files["bag"]) == pytest.approx(0.6, abs=0.03)
+    assert 3.0 < run.simulated < 3.6  # the run ended with the required node
+    summary = json.loads(run.files["summary"].read_text())
+    assert summary["nodes"] == run.nodes
+    assert not any(name.endswith("image/compressed") for name in summary["topics"])
+    # The project's packages were importable only during the run.
+    assert "motion_msgs" not in sys.modules
+    assert not any("square_project" in path for path in sys.path)
+
+
+def test_a_launch_file_a_node_script_and_another_launcher_run_too(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    launch = PROJECT / "packages/motion_control/launch/square.launch"
+    run = run_project(launch, out=tmp_path / "launch", seconds=20)
+    assert travelled(run.files["bag"]) == pytest.approx(0.5, abs=0.03)  # the default side
+    # rosrun of the server alone: it serves until the run's time is up.
+    run = run_project(PROJECT, launcher="side-server", out=tmp_path / "server", seconds=2)
+    assert run.nodes == {"/side_server": "still running after 2 s, stopped"}
+    script = PROJECT / "packages/motion_msgs/src/side_server.py"
+    assert launched_nodes(script)[1].nodes[0].script == script
+
+
+def test_what_the_launch_files_say_is_read_as_roslaunch_reads_it(monkeypatch):
+    workspace, launched = launched_nodes(PROJECT)
+    assert sorted(workspace.packages) == ["motion_control", "motion_msgs"]
+    assert workspace.find("motion_msgs") == PROJECT / "packages/motion_msgs"
+    server, driver = launched.nodes
+    assert (server.name, server.namespace, server.params) == (
+        "side_server",
+        "/duckiebot",
+        {"side": 0.6},  # type="double", from the include's argument
+    )
+    assert driver.params == {"speed": 0.2, "gains": {"k_omega": 2.0, "settle": 0.3}}
+    assert driver.remap == {"car_cmd": "car_cmd_switch_node/cmd"}
+    assert driver.required
+    assert driver.where.endswith("square.launch, line 11")
+    # $(env VEHICLE_NAME) and the arguments given on the launcher's line.
+    monkeypatch.setenv("VEHICLE_NAME", "ente")
+    _, launched = launched_nodes(PROJECT)
+    assert {node.namespace for node in launched.nodes} == {"/ente"}
+
+
+def test_a_project_that_cannot_run_is_said_with_its_file_and_line(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ProjectError, match=r"no launcher 'nope'; its launchers are: default, "):
+        launched_nodes(PROJECT, launcher="nope")
+    with pytest.raises(ProjectError, match=r"not inside a Duckietown project"):
+        Workspace.around(tmp_path)
+    broken = tmp_path / "broken"
+    shutil.copytree(PROJECT, broken)
+    launch = broken / "packages/motion_control/launch/square.launch"
+    launch.write_text(launch.read_text().replace('output="screen"', 'output="screen'))
+    with pytest.raises(ProjectError, match=r"square\.launch does not parse, line 11: "):
+        launched_nodes(broken)
+    launch.write_text(launch.read_text().replace('output="screen', 'output="screen"'))
+    launch.write_text(launch.read_text().replace("$(arg side)", "$(arg sides)"))
+    with pytest.raises(ProjectError, match=r"square\.launch, line 8 uses \$\(arg sides\)"):
+        launched_nodes(broken)
+    launch.write_text(launch.read_text().replace("$(arg sides)", "$(arg side)"))
+    node = broken / "packages/motion_control/src/square_node.py"
+    node.write_text(node.read_text().replace("import Progress", "import Progres"))
+    with pytest.raises(
+        ProjectError,
+        match=r"The node square_driver stopped with ImportError at "
+        r"packages/motion_control/src/square_node\.py, line 7: cannot import name 'Progres'",
+    ):
+        run_project(broken, out=tmp_path / "run")
+    assert (tmp_path / "run" / "run.bag").is_file()  # closed whole, wheels stopped
+    launcher = broken / "launchers/default.sh"
+    launcher.write_text(launcher.read_text() + "dt-exec make everything\n")
+    with pytest.raises(ProjectError, match=r"default\.sh, line 13 runs 'make'"):
+        launched_nodes(broken)
+
+
+def test_duckie_run_prints_the_nodes_and_what_they_published(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", str(PROJECT), "--out", "out", "--seconds", "20"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("ran 2 node(s) for 3.")
+    assert "  /duckiebot/square_driver/progress  " in out
+    assert out.rstrip().endswith("wrote run.bag, log.txt, summary.json in out")
+    assert main(["run", str(PROJECT), "-L", "nope"]) == 1
+    assert "has no launcher 'nope'" in capsys.readouterr().err
