@@ -35,6 +35,7 @@ from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 import yaml
 
 from duckielib.errors import DuckielibError
+from duckielib.tools.robot_env import node_clocks, robot_data, windows_saved
 
 __all__ = [
     "NodeSpec",
@@ -722,6 +723,12 @@ class ProjectRun:
         width = max((len(topic) for topic in self.topics), default=0)
         lines += [f"  {topic:<{width}}  {count}" for topic, count in self.topics.items()]
         lines += [f"note: {note}" for note in self.notes]
+        data = sorted(path for path in (self.folder / "data").rglob("*") if path.is_file())
+        if data:
+            lines.append(
+                f"the nodes wrote {len(data)} file(s) to the robot's /data: they are in "
+                f"{self.folder / 'data'}"
+            )
         lines.append(f"wrote run.bag, log.txt, summary.json in {self.folder}")
         return "\n".join(lines)
 
@@ -772,8 +779,10 @@ def run_project(
     """Run a Duckietown project's nodes on the virtual Duckiebot for ``seconds``.
 
     The run's bag (every topic but the camera's images), ``log.txt`` and ``summary.json`` are
-    written in ``out``. It ends after ``seconds`` of simulated time, or when a ``required``
-    node ends, or when every node has ended; the wheels are stopped in every case.
+    written in ``out``; what the nodes write to the robot's ``/data`` lands in ``out/data``,
+    and the frames they show with ``cv2.imshow`` in ``out/windows`` (:mod:`.robot_env`). It
+    ends after ``seconds`` of simulated time, or when a ``required`` node ends, or when every
+    node has ended; the wheels are stopped in every case.
 
     Raises:
         ProjectError: for a project, launcher or launch file that cannot be run (the file and
@@ -800,7 +809,13 @@ def run_project(
     ended: Dict[str, str] = {}
     wall = time.perf_counter()
     path_before = list(sys.path)  # node scripts put their folders first, as on the robot
-    with workspace.importable(), modules_installed(replace_real=True):
+    notes = list(launched.notes)
+    with contextlib.ExitStack() as robot:
+        robot.enter_context(workspace.importable())
+        robot.enter_context(modules_installed(replace_real=True))
+        robot.enter_context(robot_data(folder / "data"))
+        robot.enter_context(node_clocks(workspace.root, lambda: graph.time))
+        robot.enter_context(windows_saved(folder / "windows", notes))
         for spec in launched.nodes:
             bot.launch(
                 _node_main(spec, node_script(spec.script, *spec.args), ended),
@@ -837,7 +852,7 @@ def run_project(
             for spec in launched.nodes
         },
         topics=dict(sorted(recorder.counts.items())),
-        notes=list(launched.notes),
+        notes=notes,
         simulated=bot.time,
         wall=time.perf_counter() - wall,
     )

@@ -5,17 +5,22 @@ catkin packages under ``packages/``, one with a Python package under ``include/`
 by its ``setup.py``, as ``catkin_python_setup`` does), the other with its own ``msg/`` and
 ``srv/`` and the node that answers the service; launch files with arguments, a group in the
 robot's namespace, an include with arguments, parameters chosen by ``if``/``unless``, a
-``rosparam`` file and a remapping; and launchers that ``roslaunch`` and ``rosrun``.
+``rosparam`` file and a remapping; launchers that ``roslaunch`` and ``rosrun``; and, in
+``extras.launch``, what students' nodes do on a robot: record to ``/data/bags`` with rosbag's
+API, time a controller with ``time.time()``, show the camera with ``cv2.imshow``.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
 import shutil
 import sys
+import time
 from pathlib import Path
 
+import cv2
 import pytest
 
 from duckielib.bags import Bag, pose_tracks
@@ -146,3 +151,32 @@ def test_duckie_run_prints_the_nodes_and_what_they_published(tmp_path, capsys, m
     assert out.rstrip().endswith("wrote run.bag, log.txt, summary.json in out")
     assert main(["run", str(PROJECT), "-L", "nope"]) == 1
     assert "has no launcher 'nope'" in capsys.readouterr().err
+
+
+def test_nodes_find_the_robots_data_its_clock_and_a_window(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    run = run_project(PROJECT, launcher="extras", out=tmp_path / "run", seconds=10)
+    assert set(run.nodes.values()) == {"ended"}
+    log = (tmp_path / "run" / "log.txt").read_text()
+    # /data/bags/ticks.bag and /data/ticks.txt land in the run's folder, whole.
+    ticks = Bag(tmp_path / "run" / "data" / "bags" / "ticks.bag")
+    assert ticks.topics["left_ticks"].count == 60  # 2 s at 30 Hz
+    assert (tmp_path / "run" / "data" / "ticks.txt").read_text() == "60 ticks\n"
+    assert "[/duckiebot/tick_recorder]: recorded 60 ticks" in log
+    assert not Path("/data/bags/ticks.bag").exists()
+    # time.time() and perf_counter() in the node read the simulated clock: dt is the rate's.
+    assert "[/duckiebot/heading_pid]: mean dt 0.100 s over 20 steps, 2.00 s in all" in log
+    # cv2's window: the latest frame saved, said once.
+    frame = cv2.imread(str(tmp_path / "run" / "windows" / "camera.png"))
+    assert frame.shape == (480, 640, 3)
+    assert "[/duckiebot/camera_viewer]: showed 5 frames" in log
+    assert run.notes == [
+        "cv2.imshow shows no window here: each window's latest frame is saved in "
+        f"{tmp_path / 'run' / 'windows'}."
+    ]
+    assert "the nodes wrote 2 file(s) to the robot's /data" in run.text()
+    # Outside the run, the wall clock, open() and cv2 are as they were.
+    assert abs(time.time() - time.mktime(time.localtime())) < 2
+    assert not hasattr(open, "__wrapped__")
+    assert not hasattr(os.stat, "__wrapped__")
+    assert cv2.imshow.__module__ in (None, "cv2")

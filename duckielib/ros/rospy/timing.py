@@ -210,6 +210,11 @@ def _sleeping_node() -> Optional[Node]:
     return None
 
 
+def calling_node() -> Optional[Node]:
+    """The in-process node whose code is running now (its main code or a callback), or None."""
+    return _sleeping_node()
+
+
 def _time_sleep(seconds: Any) -> None:
     node = _sleeping_node()
     if node is None or node.is_shutdown:

@@ -1,0 +1,190 @@
+"""What a node finds on a Duckiebot that a laptop lacks, for ``duckie run``.
+
+- **The robot's** ``/data``: a node that records to ``/data/bags/run.bag`` or creates
+  ``/data/logs`` writes into the run's folder instead (``OUT/data/``), for plain file calls
+  (``open``, ``os``, ``pathlib``) and the ``rosbag`` API alike; nothing is written to the
+  laptop's ``/``.
+- **Simulated clocks**: ``time.time()``, ``monotonic()`` and ``perf_counter()`` (and their
+  ``_ns`` forms) called from the project's own files, in a node's code, read the simulated
+  clock, as ``time.sleep`` already waits simulated seconds: a controller that takes its dt from
+  ``time.time()`` sees the dt it would see on the robot. Libraries and everything outside the
+  nodes keep the wall clock.
+- **Windows**: ``cv2.imshow`` shows no window here; each window's latest frame is saved as
+  ``OUT/windows/NAME.png``, and the run says so once. ``cv2.waitKey`` returns -1 (no key).
+
+Laptop side; never deployed.
+"""
+
+from __future__ import annotations
+
+import builtins
+import contextlib
+import io
+import os
+import re
+import sys
+import time
+from pathlib import Path
+from typing import Any, Callable, Dict, Iterator, List
+
+__all__ = ["node_clocks", "robot_data", "windows_saved"]
+
+#: The robot's data volume, as nodes name it.
+ROBOT_DATA = "/data"
+
+#: The os functions whose first argument is a path (the second too for rename and replace).
+_ONE_PATH = (
+    "open",
+    "stat",
+    "lstat",
+    "mkdir",
+    "makedirs",
+    "listdir",
+    "scandir",
+    "remove",
+    "unlink",
+    "rmdir",
+    "access",
+    "chmod",
+)
+_TWO_PATHS = ("rename", "replace")
+
+
+@contextlib.contextmanager
+def robot_data(folder: Path) -> Iterator[Path]:
+    """While inside, paths in ``/data`` lead to ``folder`` (created); yields it."""
+    folder.mkdir(parents=True, exist_ok=True)
+    target = str(folder)
+
+    def mapped(path: Any) -> Any:
+        if isinstance(path, int):  # a file descriptor
+            return path
+        try:
+            text = os.fspath(path)
+        except TypeError:
+            return path
+        if isinstance(text, bytes):
+            return path
+        if text == ROBOT_DATA or text.startswith(ROBOT_DATA + "/"):
+            return target + text[len(ROBOT_DATA) :]
+        return path
+
+    def one_path(function: Callable[..., Any]) -> Callable[..., Any]:
+        def call(path: Any, *args: Any, **kwargs: Any) -> Any:
+            return function(mapped(path), *args, **kwargs)
+
+        call.__wrapped__ = function  # type: ignore[attr-defined]
+        return call
+
+    def two_paths(function: Callable[..., Any]) -> Callable[..., Any]:
+        def call(source: Any, destination: Any, *args: Any, **kwargs: Any) -> Any:
+            return function(mapped(source), mapped(destination), *args, **kwargs)
+
+        call.__wrapped__ = function  # type: ignore[attr-defined]
+        return call
+
+    saved: Dict[Any, Dict[str, Any]] = {os: {}, builtins: {}, io: {}}
+    for name in _ONE_PATH:
+        saved[os][name] = getattr(os, name)
+    for name in _TWO_PATHS:
+        saved[os][name] = getattr(os, name)
+    saved[builtins]["open"] = builtins.open
+    saved[io]["open"] = io.open
+    try:
+        for name in _ONE_PATH:
+            setattr(os, name, one_path(saved[os][name]))
+        for name in _TWO_PATHS:
+            setattr(os, name, two_paths(saved[os][name]))
+        builtins.open = one_path(saved[builtins]["open"])
+        io.open = builtins.open
+        yield folder
+    finally:
+        for module, functions in saved.items():
+            for name, function in functions.items():
+                setattr(module, name, function)
+
+
+#: The clocks of ``time`` a node's code may read.
+_CLOCKS = ("time", "monotonic", "perf_counter", "time_ns", "monotonic_ns", "perf_counter_ns")
+
+
+@contextlib.contextmanager
+def node_clocks(root: Path, simulated: Callable[[], float]) -> Iterator[None]:
+    """While inside, the clocks read from files under ``root``, in a node's code, are simulated.
+
+    Args:
+        root: the project's folder: only its own files see the simulated clock.
+        simulated: the simulated time, in seconds.
+    """
+    from duckielib.ros.rospy.timing import calling_node
+
+    prefix = str(root) + os.sep
+    walls = {name: getattr(time, name) for name in _CLOCKS}
+    epoch = walls["time"]() - simulated()  # time.time() goes on from the wall clock's now
+
+    def clock(name: str) -> Callable[[], Any]:
+        wall = walls[name]
+        offset = epoch if name.startswith("time") else 0.0
+        in_ns = name.endswith("_ns")
+
+        def read() -> Any:
+            caller = sys._getframe(1).f_code.co_filename
+            if not caller.startswith(prefix) or calling_node() is None:
+                return wall()
+            seconds = simulated() + offset
+            return int(seconds * 1_000_000_000) if in_ns else seconds
+
+        read.__wrapped__ = wall  # type: ignore[attr-defined]
+        return read
+
+    try:
+        for name in _CLOCKS:
+            setattr(time, name, clock(name))
+        yield
+    finally:
+        for name, wall in walls.items():
+            setattr(time, name, wall)
+
+
+@contextlib.contextmanager
+def windows_saved(folder: Path, notes: List[str]) -> Iterator[Dict[str, int]]:
+    """While inside, ``cv2``'s windows save their frames in ``folder``; yields frames by window.
+
+    The first frame shown adds a sentence to ``notes``.
+    """
+    import cv2
+
+    names = ("imshow", "namedWindow", "waitKey", "destroyWindow", "destroyAllWindows")
+    saved = {name: getattr(cv2, name) for name in names if hasattr(cv2, name)}
+    shown: Dict[str, int] = {}
+
+    def imshow(window: str, image: Any) -> None:
+        if not shown:
+            folder.mkdir(parents=True, exist_ok=True)
+            notes.append(
+                f"cv2.imshow shows no window here: each window's latest frame is saved in {folder}."
+            )
+        shown[window] = shown.get(window, 0) + 1
+        safe = re.sub(r"[^\w.-]+", "_", str(window)) or "window"
+        cv2.imwrite(str(folder / f"{safe}.png"), image)
+
+    def nothing(*args: Any, **kwargs: Any) -> None:
+        return None
+
+    def wait_key(delay: int = 0) -> int:
+        return -1
+
+    standing_in = {
+        "imshow": imshow,
+        "namedWindow": nothing,
+        "waitKey": wait_key,
+        "destroyWindow": nothing,
+        "destroyAllWindows": nothing,
+    }
+    try:
+        for name, function in standing_in.items():
+            setattr(cv2, name, function)
+        yield shown
+    finally:
+        for name, function in saved.items():
+            setattr(cv2, name, function)
