@@ -49,7 +49,19 @@ __all__ = [
 PathLike = Union[str, "os.PathLike[str]"]
 
 #: Launcher lines that only set the container up on the robot: nothing to run here.
-_SET_UP = ("source", "set", "dt-launchfile-init", "dt-launchfile-join", "echo", "sleep", "wait")
+_SET_UP = (
+    "source",
+    ".",
+    "set",
+    "dt-launchfile-init",
+    "dt-launchfile-join",
+    "echo",
+    "sleep",
+    "wait",
+    "roscore",  # the virtual Duckiebot's graph is the master
+)
+#: The shell's own words: a launcher's ``if ... fi`` around lines runs the lines inside.
+_SHELL = ("if", "then", "else", "elif", "fi", "do", "done", "for", "while", "until", "case", "esac")
 #: Where a node script may sit in its package, searched first (rosrun searches them all).
 _SCRIPT_FOLDERS = ("src", "scripts", "nodes", "bin", "")
 #: Topics a run does not record: the camera's images (about 30 large messages a second).
@@ -406,14 +418,14 @@ class _LaunchReader:
         self.launched = Launched()
 
     def read(self, path: Path, args: Dict[str, str], namespace: str = "/") -> None:
+        """Read a launch file given ``roslaunch``'s ``name:=value`` arguments.
+
+        As roslaunch does, the arguments of the command line are there for ``$(arg ...)``
+        even where the file does not declare them.
+        """
         root = _parse_xml(path)
-        scope = _Scope(path, {}, namespace, {})
+        scope = _Scope(path, dict(args), namespace, {})
         self._children(root, scope, given=args)
-        unused = set(args) - set(scope.args)
-        if unused:
-            raise ProjectError(
-                f"{path} declares no argument {', '.join(sorted(unused))} (no <arg name=...>)."
-            )
 
     def _attr(self, element: _Element, scope: _Scope, name: str, default: Any = None) -> Any:
         if name not in element.attrs:
@@ -647,42 +659,56 @@ def _read_launcher(workspace: Workspace, reader: _LaunchReader, launcher: str) -
             f"The project {workspace.root} has no launcher {launcher!r}"
             + (f"; its launchers are: {', '.join(there)}." if there else " (no launchers/).")
         )
-    env = dict(os.environ)
     for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
         where = f"{path}, line {number}"
-        try:
-            words = shlex.split(line, comments=True)
-        except ValueError as error:
-            raise ProjectError(f"{where}: {error}.") from None
-        words = [os.path.expandvars(word) if "$" in word else word for word in words]
-        if words and words[0] == "dt-exec":
-            words = words[1:]
-        if not words or words[0] in _SET_UP or words[0].startswith("#!"):
+        words = _launcher_words(line, where)
+        if not words or words[0] in _SET_UP + _SHELL or words[0].startswith("#!"):
             continue
         if words[0] == "export" or re.fullmatch(r"\w+=.*", words[0]):
             for word in words[1:] if words[0] == "export" else words:
                 name, _, value = word.partition("=")
-                env[name] = os.environ[name] = value
+                os.environ[name] = value
             continue
-        command, rest = words[0], words[1:]
-        if command == "roslaunch":
-            rest = [word for word in rest if not word.startswith("--")]
-            launch, rest = _launch_file(workspace, rest, where)
-            given, _ = _assignments(rest, where)
-            reader.read(launch.resolve(), given)
-        elif command == "rosrun" and len(rest) >= 2:
-            script = workspace.executable(rest[0], rest[1])
-            reader.launched.nodes.append(_script_node(workspace, script, rest[2:], where))
-        elif command in ("python", "python3") and rest and not rest[0].startswith("-"):
-            script = (workspace.root / rest[0]).resolve()
-            if not script.is_file():
-                raise ProjectError(f"{where}: there is no script {rest[0]} in the project.")
-            reader.launched.nodes.append(_script_node(workspace, script, rest[1:], where))
-        else:
-            raise ProjectError(
-                f"{where} runs {command!r}, which duckie run cannot run here: it runs "
-                "roslaunch, rosrun and python3 lines."
-            )
+        _launcher_line(workspace, reader, words, where)
+
+
+def _launcher_words(line: str, where: str) -> List[str]:
+    """A launcher line's words, its variables expanded, without ``dt-exec`` or a final ``&``."""
+    try:
+        words = shlex.split(line, comments=True)
+    except ValueError as error:
+        raise ProjectError(f"{where}: {error}.") from None
+    words = [os.path.expandvars(word) if "$" in word else word for word in words]
+    if words and words[0] == "dt-exec":
+        words = words[1:]
+    while words and words[-1] in ("&", ";"):
+        words = words[:-1]
+    return words
+
+
+def _launcher_line(
+    workspace: Workspace, reader: _LaunchReader, words: List[str], where: str
+) -> None:
+    """Read what one launcher line starts: a roslaunch, a rosrun or a python3 script."""
+    command, rest = words[0], words[1:]
+    if command == "roslaunch":
+        rest = [word for word in rest if not word.startswith("--")]
+        launch, rest = _launch_file(workspace, rest, where)
+        given, _ = _assignments(rest, where)
+        reader.read(launch.resolve(), given)
+    elif command == "rosrun" and len(rest) >= 2:
+        script = workspace.executable(rest[0], rest[1])
+        reader.launched.nodes.append(_script_node(workspace, script, rest[2:], where))
+    elif command in ("python", "python3") and rest and not rest[0].startswith("-"):
+        script = (workspace.root / rest[0]).resolve()
+        if not script.is_file():
+            raise ProjectError(f"{where}: there is no script {rest[0]} in the project.")
+        reader.launched.nodes.append(_script_node(workspace, script, rest[1:], where))
+    else:
+        raise ProjectError(
+            f"{where} runs {command!r}, which duckie run cannot run here: it runs "
+            "roslaunch, rosrun and python3 lines."
+        )
 
 
 @dataclass
@@ -877,4 +903,27 @@ def _crash_said(crash: BaseException, workspace: Workspace) -> str:
     if frames:
         frame = frames[-1]
         at = f" at {Path(frame.filename).relative_to(workspace.root)}, line {frame.lineno}"
-    return f"The node {node} stopped with {type(cause).__name__}{at}: {cause}."
+    said = f"The node {node} stopped with {type(cause).__name__}{at}: {cause}."
+    if isinstance(cause, ModuleNotFoundError) and cause.name:
+        said += " " + _install_hint(cause.name.partition(".")[0], workspace)
+    return said
+
+
+def _install_hint(module: str, workspace: Workspace) -> str:
+    """How to get a module a node imports: from the project's ``dependencies-py3.txt``."""
+    listed = workspace.root / "dependencies-py3.txt"
+    wanted = re.sub(r"[-_.]+", "_", module).lower()
+    if listed.is_file():
+        for line in listed.read_text(encoding="utf-8", errors="replace").splitlines():
+            requirement = line.split("#", 1)[0].strip()
+            name = re.split(r"[\s<>=!~;\[]", requirement, maxsplit=1)[0]
+            if name and re.sub(r"[-_.]+", "_", name).lower() == wanted:
+                return (
+                    f"The project lists {requirement} in dependencies-py3.txt, which dts devel "
+                    f"build installs on the robot: install it here too, with "
+                    f"'.venv/bin/pip install {requirement}'."
+                )
+    return (
+        f"If {module} is a library your robot's image installs, install it here too "
+        "(.venv/bin/pip install ...)."
+    )

@@ -1,7 +1,8 @@
 """What a node finds on a Duckiebot that a laptop lacks, for ``duckie run``.
 
 - **The robot's** ``/data``: a node that records to ``/data/bags/run.bag`` or creates
-  ``/data/logs`` writes into the run's folder instead (``OUT/data/``), for plain file calls
+  ``/data/logs/mine`` writes into the run's folder instead (``OUT/data/``, which holds the
+  robot's ``bags``, ``config``, ``logs`` and ``stats`` folders), for plain file calls
   (``open``, ``os``, ``pathlib``) and the ``rosbag`` API alike; nothing is written to the
   laptop's ``/``.
 - **Simulated clocks**: ``time.time()``, ``monotonic()`` and ``perf_counter()`` (and their
@@ -31,6 +32,9 @@ __all__ = ["node_clocks", "robot_data", "windows_saved"]
 
 #: The robot's data volume, as nodes name it.
 ROBOT_DATA = "/data"
+#: Folders of a Duckiebot's /data that nodes write into without creating them (students' nodes
+#: record to /data/bags/... directly: their bags came back from their robots).
+ROBOT_DATA_FOLDERS = ("bags", "config", "logs", "stats")
 
 #: The os functions whose first argument is a path (the second too for rename and replace).
 _ONE_PATH = (
@@ -53,7 +57,8 @@ _TWO_PATHS = ("rename", "replace")
 @contextlib.contextmanager
 def robot_data(folder: Path) -> Iterator[Path]:
     """While inside, paths in ``/data`` lead to ``folder`` (created); yields it."""
-    folder.mkdir(parents=True, exist_ok=True)
+    for sub in ROBOT_DATA_FOLDERS:
+        (folder / sub).mkdir(parents=True, exist_ok=True)
     target = str(folder)
 
     def mapped(path: Any) -> Any:

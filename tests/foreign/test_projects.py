@@ -136,6 +136,17 @@ def test_a_project_that_cannot_run_is_said_with_its_file_and_line(tmp_path, monk
     ):
         run_project(broken, out=tmp_path / "run")
     assert (tmp_path / "run" / "run.bag").is_file()  # closed whole, wheels stopped
+    node.write_text(
+        node.read_text().replace("import Progres\n", "import Progress\nimport tag_finder\n")
+    )
+    (broken / "dependencies-py3.txt").write_text("numpy\ntag-finder>=3.1  # the robot's\n")
+    with pytest.raises(
+        ProjectError,
+        match=r"No module named 'tag_finder'\. The project lists tag-finder>=3\.1 in "
+        r"dependencies-py3\.txt, which dts devel build installs on the robot: install it here "
+        r"too, with '\.venv/bin/pip install tag-finder>=3\.1'\.",
+    ):
+        run_project(broken, out=tmp_path / "run2")
     launcher = broken / "launchers/default.sh"
     launcher.write_text(launcher.read_text() + "dt-exec make everything\n")
     with pytest.raises(ProjectError, match=r"default\.sh, line 13 runs 'make'"):
@@ -158,10 +169,10 @@ def test_nodes_find_the_robots_data_its_clock_and_a_window(tmp_path, monkeypatch
     run = run_project(PROJECT, launcher="extras", out=tmp_path / "run", seconds=10)
     assert set(run.nodes.values()) == {"ended"}
     log = (tmp_path / "run" / "log.txt").read_text()
-    # /data/bags/ticks.bag and /data/ticks.txt land in the run's folder, whole.
+    # /data/bags/ticks.bag and /data/logs/ticks.txt land in the run's folder, whole.
     ticks = Bag(tmp_path / "run" / "data" / "bags" / "ticks.bag")
     assert ticks.topics["left_ticks"].count == 60  # 2 s at 30 Hz
-    assert (tmp_path / "run" / "data" / "ticks.txt").read_text() == "60 ticks\n"
+    assert (tmp_path / "run" / "data" / "logs" / "ticks.txt").read_text() == "60 ticks\n"
     assert "[/duckiebot/tick_recorder]: recorded 60 ticks" in log
     assert not Path("/data/bags/ticks.bag").exists()
     # time.time() and perf_counter() in the node read the simulated clock: dt is the rate's.
@@ -180,3 +191,28 @@ def test_nodes_find_the_robots_data_its_clock_and_a_window(tmp_path, monkeypatch
     assert not hasattr(open, "__wrapped__")
     assert not hasattr(os.stat, "__wrapped__")
     assert cv2.imshow.__module__ in (None, "cv2")
+
+
+def test_launcher_arguments_reach_an_undeclared_arg_and_shell_lines_are_read(tmp_path):
+    # As roslaunch does: arguments given on the command line are there for $(arg ...) of the
+    # launch file named, declared or not. A launcher's `if ... fi` around a roscore is shell.
+    copy = tmp_path / "copy"
+    shutil.copytree(PROJECT, copy)
+    launcher = copy / "launchers/default.sh"
+    launcher.write_text(
+        launcher.read_text()
+        .replace("side:=0.6", "side:=0.6 laps:=3 &")
+        .replace(
+            "# launching app\n",
+            '# launching app\nif [[ -z "${VEHICLE_NAME}" ]]; then\n  roscore &\n  sleep 5\nfi\n',
+        )
+    )
+    launch = copy / "packages/motion_control/launch/square.launch"
+    launch.write_text(
+        launch.read_text().replace(
+            '<param name="speed" value="0.2"',
+            '<param name="laps" value="$(arg laps)"/>\n      <param name="speed" value="0.2"',
+        )
+    )
+    _, launched = launched_nodes(copy)
+    assert launched.nodes[1].params["laps"] == 3
