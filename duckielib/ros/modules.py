@@ -59,7 +59,10 @@ def _aliases() -> Dict[str, Dict[str, types.ModuleType]]:
     duckietown.dtros = dtros  # type: ignore[attr-defined]
     duckietown._duckielib_alias = True  # type: ignore[attr-defined]
     found: Dict[str, Dict[str, types.ModuleType]] = {
-        "rospy": {"rospy": rospy},
+        "rospy": {
+            "rospy": rospy,
+            **{f"rospy.{name}": module for name, module in rospy.SUBMODULES.items()},
+        },
         "duckietown": {"duckietown": duckietown, "duckietown.dtros": dtros},
     }
     for package in _MESSAGE_PACKAGES:

@@ -227,6 +227,7 @@ class Node:
         self.is_shutdown = False
         self.shutdown_reason: Optional[str] = None
         self._log_marks: Dict[Any, float] = {}
+        self._log_texts: Dict[Any, str] = {}
         #: Simulated time its main code owes for rospy calls made without waiting, in ns.
         self.compute_debt_ns = 0
         #: Whether it has main code of its own (False for a node that lives in callbacks,
@@ -255,6 +256,17 @@ class Node:
         last = self._log_marks.get(key)
         if last is None or self.graph.time - last >= period:
             self._log_marks[key] = self.graph.time
+            self.log(level, text)
+
+    def log_throttled_identical(self, key: Any, period: float, level: int, text: str) -> None:
+        """Log when the text differs from this call site's last, or ``period`` has passed."""
+        last = self._log_marks.get(("time", key))
+        elapsed = last is None or self.graph.time - last >= period
+        if elapsed:
+            self._log_marks[("time", key)] = self.graph.time
+        changed = self._log_texts.get(key) != text
+        self._log_texts[key] = text
+        if changed or elapsed:
             self.log(level, text)
 
     def log_once(self, key: Any, level: int, text: str) -> None:

@@ -175,3 +175,68 @@ def test_a_received_message_carries_its_connection_header(graph):
     assert header["type"] == "std_msgs/String"
     assert header["md5sum"] == String._md5sum
     assert header["latching"] == "1"
+
+
+def test_throttled_identical_logs_say_what_changed_or_what_stayed_a_while(graph):
+    def node():
+        rospy.init_node("counter")
+        for value in [1, 1, 1, 2, 2, 3] + [3] * 30:
+            rospy.loginfo_throttle_identical(2.0, f"value {value}")
+            rospy.logfatal_throttle(10.0, "fatal once in 10 s")
+            rospy.sleep(0.1)
+
+    graph.launch(node)
+    graph.run(4.0)
+    texts = [record.text for record in graph.log if "counter" in record.node]
+    # The first of each new value, then the unchanged one again each 2 s (rospy's rule).
+    assert [text for text in texts if text.startswith("value")] == [
+        "value 1",
+        "value 2",
+        "value 3",
+        "value 3",
+    ]
+    assert texts.count("fatal once in 10 s") == 1
+
+
+def test_published_topics_and_remapped_names_as_rospy_gives_them(graph):
+    found = {}
+
+    def node():
+        rospy.init_node("talker", anonymous=False)
+        rospy.Publisher("chatter", String, queue_size=1)
+        rospy.Publisher("/other/news", String, queue_size=1)
+        found["all"] = rospy.get_published_topics()
+        found["other"] = rospy.get_published_topics("/other")
+        found["remapped"] = rospy.remap_name("chatter")
+        found["as_is"] = rospy.remap_name("news")
+        found["requested"] = rospy.SUBMODULES["core"].is_shutdown_requested()
+
+    graph.launch(node, namespace="/duckiebot", remap={"chatter": "/talk"})
+    graph.run(0.1)
+    assert ["/talk", "std_msgs/String"] in found["all"]
+    assert found["other"] == [["/other/news", "std_msgs/String"]]
+    assert found["remapped"] == "/talk"
+    assert found["as_is"] == "news"  # not remapped: left as given, as rospy does
+    assert found["requested"] is False
+
+
+def test_rospys_modules_import_by_their_names():
+    from duckielib.ros.modules import modules_installed
+
+    with modules_installed(replace_real=True):
+        import rospy as served
+        from rospy.exceptions import ROSInterruptException
+        from rospy.msg import AnyMsg
+        from rospy.names import ns_join
+        from rospy.rostime import Duration, Time
+        from rospy.timer import TimerEvent
+
+        assert Time is served.Time
+        assert Duration is served.Duration
+        assert ROSInterruptException is served.ROSInterruptException
+        assert AnyMsg is served.AnyMsg
+        assert TimerEvent is served.TimerEvent
+        assert ns_join("/duckiebot", "odometry_node") == "/duckiebot/odometry_node"
+        assert served.Header is Header
+        with pytest.raises(AttributeError, match=r"module 'rospy\.rostime' has no attribute 'x'"):
+            served.rostime.x  # noqa: B018

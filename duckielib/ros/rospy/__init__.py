@@ -36,6 +36,8 @@ The package is split as rospy itself is: :mod:`.client` (nodes, names, parameter
 
 from __future__ import annotations
 
+import types
+
 from duckielib.ros.exceptions import (
     ROSException,
     ROSInitException,
@@ -46,7 +48,9 @@ from duckielib.ros.exceptions import (
     TransportException,
 )
 from duckielib.ros.log import DEBUG, ERROR, FATAL, INFO, WARN
+from duckielib.ros.rospy import client as _client_module
 from duckielib.ros.rospy import threads as _threads  # noqa: F401  (adopts node threads)
+from duckielib.ros.rospy import topics as _topics_module
 from duckielib.ros.rospy.client import (
     delete_param,
     get_caller_id,
@@ -55,11 +59,13 @@ from duckielib.ros.rospy.client import (
     get_param,
     get_param_cached,
     get_param_names,
+    get_published_topics,
     has_param,
     init_node,
     is_shutdown,
     myargv,
     on_shutdown,
+    remap_name,
     resolve_name,
     search_param,
     set_param,
@@ -73,16 +79,23 @@ from duckielib.ros.rospy.logs import (
     logdebug,
     logdebug_once,
     logdebug_throttle,
+    logdebug_throttle_identical,
     logerr,
     logerr_once,
     logerr_throttle,
+    logerr_throttle_identical,
     logfatal,
+    logfatal_once,
+    logfatal_throttle,
+    logfatal_throttle_identical,
     loginfo,
     loginfo_once,
     loginfo_throttle,
+    loginfo_throttle_identical,
     logwarn,
     logwarn_once,
     logwarn_throttle,
+    logwarn_throttle_identical,
 )
 from duckielib.ros.rospy.services import (
     Service,
@@ -114,6 +127,7 @@ __all__ = [
     "get_caller_id",
     "get_namespace",
     "resolve_name",
+    "remap_name",
     "is_shutdown",
     "signal_shutdown",
     "on_shutdown",
@@ -136,6 +150,7 @@ __all__ = [
     "delete_param",
     "search_param",
     "get_param_names",
+    "get_published_topics",
     # time
     "Time",
     "Duration",
@@ -159,6 +174,14 @@ __all__ = [
     "loginfo_once",
     "logwarn_once",
     "logerr_once",
+    "logfatal_throttle",
+    "logfatal_once",
+    "logdebug_throttle_identical",
+    "loginfo_throttle_identical",
+    "logwarn_throttle_identical",
+    "logerr_throttle_identical",
+    "logfatal_throttle_identical",
+    "Header",
     "DEBUG",
     "INFO",
     "WARN",
@@ -174,3 +197,65 @@ __all__ = [
     "ServiceException",
     "TransportException",
 ]
+
+
+def _header() -> type:
+    from duckielib import messages
+
+    return messages.std_msgs.msg.Header  # type: ignore[attr-defined]
+
+
+#: std_msgs' Header, as rospy offers it (``rospy.Header``).
+Header = _header()
+
+
+def _flat(name: str, doc: str, **own: object) -> types.ModuleType:
+    """A module of rospy's (``rospy.rostime``...): its own names, then every name of rospy's."""
+    module = types.ModuleType(f"rospy.{name}", doc)
+    module.__dict__.update(own)
+
+    def rospy_name(attr: str) -> object:
+        if attr in globals() and not attr.startswith("_"):
+            return globals()[attr]
+        raise AttributeError(f"module 'rospy.{name}' has no attribute {attr!r}")
+
+    module.__getattr__ = rospy_name  # type: ignore[method-assign]
+    return module
+
+
+def _names_module() -> types.ModuleType:
+    from duckielib.ros import names as _ros_names
+
+    return _flat(
+        "names",
+        "rospy.names: resolving names (as rospy's).",
+        ns_join=lambda ns, name: (
+            name if name.startswith(("/", "~")) else _ros_names.normalize_namespace(ns) + name
+        ),
+        canonicalize_name=_ros_names.canonical,
+        is_global=lambda name: name.startswith("/"),
+        is_private=lambda name: name.startswith("~"),
+    )
+
+
+#: rospy's submodules, which code imports by name (``from rospy.rostime import Time``).
+rostime = _flat("rostime", "rospy.rostime: ROS time (as rospy's).")
+names = _names_module()
+exceptions = _flat("exceptions", "rospy.exceptions: rospy's exceptions.")
+msg = _flat("msg", "rospy.msg: AnyMsg (as rospy's).")
+timer = _flat("timer", "rospy.timer: Rate, Timer, TimerEvent and sleep (as rospy's).")
+service = _flat("service", "rospy.service: ServiceException (as rospy's).")
+#: Every module of rospy's this serves, by name (``rospy.core`` holds rospy's own names there).
+SUBMODULES = {
+    "rostime": rostime,
+    "names": names,
+    "exceptions": exceptions,
+    "msg": msg,
+    "timer": timer,
+    "service": service,
+    "topics": _topics_module,
+    "client": _client_module,
+    "core": _flat(
+        "core", "rospy.core: shutting down (as rospy's).", is_shutdown_requested=is_shutdown
+    ),
+}

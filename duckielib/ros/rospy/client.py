@@ -132,6 +132,28 @@ def resolve_name(name: str, caller_id: Optional[str] = None) -> str:
     return current_node("rospy.resolve_name()").resolve(name)
 
 
+def remap_name(name: str, caller_id: Optional[str] = None, resolved: bool = True) -> str:
+    """The name a remapping gives ``name`` (resolved), or ``name`` itself when none does."""
+    node = current_node("rospy.remap_name()")
+    full = node.resolve(name)
+    return full if full != names.resolve(name, node.namespace, node.name) else name
+
+
+def get_published_topics(namespace: str = "/") -> List[List[str]]:
+    """The topics with a publisher under ``namespace``: ``[[name, type], ...]``, as rospy."""
+    prefix = names.canonical(names.resolve(namespace, "/")).rstrip("/") + "/"
+    return [
+        [name, record.type]
+        for name, record in sorted(current_graph().topics.items())
+        if record.publishers and (prefix == "/" or name.startswith(prefix))
+    ]
+
+
+def is_shutdown_requested() -> bool:
+    """Whether the calling node was asked to shut down (as :func:`is_shutdown` here)."""
+    return is_shutdown()
+
+
 def is_shutdown() -> bool:
     """Whether the calling node is shutting down (a loop's signal to stop)."""
     try:

@@ -66,6 +66,18 @@ def _throttled(level: int) -> Callable[..., None]:
     return log
 
 
+def _throttled_identical(level: int) -> Callable[..., None]:
+    def log(period: float, msg: Any, *args: Any) -> None:
+        text = str(msg) % args if args else str(msg)
+        current_node().log_throttled_identical(_call_site(), period, level, text)
+
+    log.__doc__ = (
+        "Log when the message differs from the last one from this line, or when ``period`` "
+        "simulated seconds have passed since this line last logged."
+    )
+    return log
+
+
 def _once(level: int) -> Callable[..., None]:
     def log(msg: Any, *args: Any) -> None:
         text = str(msg) % args if args else str(msg)
@@ -77,5 +89,12 @@ def _once(level: int) -> Callable[..., None]:
 
 logdebug_throttle, loginfo_throttle = _throttled(DEBUG), _throttled(INFO)
 logwarn_throttle, logerr_throttle = _throttled(WARN), _throttled(ERROR)
+logfatal_throttle = _throttled(FATAL)
+logdebug_throttle_identical = _throttled_identical(DEBUG)
+loginfo_throttle_identical = _throttled_identical(INFO)
+logwarn_throttle_identical = _throttled_identical(WARN)
+logerr_throttle_identical = _throttled_identical(ERROR)
+logfatal_throttle_identical = _throttled_identical(FATAL)
 logdebug_once, loginfo_once = _once(DEBUG), _once(INFO)
 logwarn_once, logerr_once = _once(WARN), _once(ERROR)
+logfatal_once = _once(FATAL)
