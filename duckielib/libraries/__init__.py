@@ -46,4 +46,16 @@ MODULES: Dict[str, str] = {
     "tf.transformations": "duckielib.libraries.tf.transformations",
     "tf2_ros": "duckielib.libraries.tf2_ros",
     "duckietown_utils": "duckielib.libraries.duckietown_utils",
+    # The library's own modules, where nodes import its helpers from (one module here).
+    **{
+        f"duckietown_utils.{name}": "duckielib.libraries.duckietown_utils"
+        for name in (
+            "jpg",
+            "yaml_wrap",
+            "image_conversions",
+            "file_utils",
+            "exceptions",
+            "exception_utils",
+        )
+    },
 }

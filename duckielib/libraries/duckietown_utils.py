@@ -22,6 +22,7 @@ from __future__ import annotations
 import logging
 import os
 import socket
+import sys
 from pathlib import Path
 from typing import Any, Optional
 
@@ -235,9 +236,22 @@ def d8_compressed_image_from_cv_image(
     return msg
 
 
+#: Modules of Duckietown's library that nodes import helpers from: this module stands for each.
+SUBMODULES = (
+    "jpg",
+    "yaml_wrap",
+    "image_conversions",
+    "file_utils",
+    "exceptions",
+    "exception_utils",
+)
+
+
 def __getattr__(name: str) -> Any:
     if name.startswith("__"):
         raise AttributeError(name)
+    if name in SUBMODULES:  # duckietown_utils.jpg is this module
+        return sys.modules[__name__]
     raise AttributeError(
         f"duckietown_utils.{name} is not on the virtual Duckiebot: only the helpers nodes use "
         f"most are here ({', '.join(__all__)}). Copy what you need from it into your node."

@@ -17,6 +17,7 @@ from typing import Any, Callable, List, Optional
 
 from duckielib.messages import get_service_class
 from duckielib.ros import rospy
+from duckielib.ros.context import current_node
 
 __all__ = ["DTROS", "DTParam", "NodeHealth", "NodeType", "ParamType", "TopicDirection", "TopicType"]
 
@@ -126,6 +127,7 @@ class DTROS:
             )
         debug = os.environ.get("DEBUG", "0") in ("1", "true", "True", "enabled", "on", "On")
         rospy.init_node(node_name, log_level=rospy.DEBUG if debug else rospy.INFO)
+        self._node = current_node("DTROS")
         self.node_name = rospy.get_name()
         self.node_type = node_type
         self.package_name = pkg_name
@@ -134,6 +136,7 @@ class DTROS:
         self.is_shutdown = False
         self._is_ghost = dt_ghost
         self._health = NodeHealth.STARTING
+        self._health_reason: Optional[str] = None
         self._switch = True
         self.log("Initializing...")
         self.srv_switch = rospy.Service("~switch", SetBool, self._srv_switch)
@@ -154,6 +157,27 @@ class DTROS:
     def health(self) -> NodeHealth:
         """The node's health, lowered by warnings and errors it logs."""
         return self._health
+
+    @property
+    def publishers(self) -> List[Any]:
+        """The node's publishers (``rospy.Publisher``), in the order it made them."""
+        return list(self._node.publishers)
+
+    @property
+    def subscribers(self) -> List[Any]:
+        """The node's subscribers (``rospy.Subscriber``), in the order it made them."""
+        return list(self._node.subscribers)
+
+    def set_health(self, health: NodeHealth, reason: Optional[str] = None) -> None:
+        """Say how the node is doing (diagnostics read it), with a reason if given.
+
+        Raises:
+            ValueError: if ``health`` is not a :class:`NodeHealth`.
+        """
+        if not isinstance(health, NodeHealth):
+            raise ValueError(f"health must be a duckietown NodeHealth, not {health!r}.")
+        self._health = health
+        self._health_reason = reason
 
     def log(self, msg: Any, type: str = "info") -> None:
         """Log ``msg`` prefixed with the node's name.

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import sys
 
 import numpy as np
 import pytest
@@ -240,3 +241,72 @@ def test_rospys_modules_import_by_their_names():
         assert served.Header is Header
         with pytest.raises(AttributeError, match=r"module 'rospy\.rostime' has no attribute 'x'"):
             served.rostime.x  # noqa: B018
+    # Uninstalled, none of them is left for a real rospy to meet.
+    from duckielib.ros.modules import _aliases, install_modules, uninstall_modules
+
+    served = {id(module) for module in _aliases()["rospy"].values()}
+    install_modules(replace_real=True)
+    uninstall_modules()
+    left = [name for name, module in sys.modules.items() if id(module) in served]
+    assert not [name for name in left if not name.startswith("duckielib.")]
+
+
+def test_a_duckietown_node_reports_its_health_and_lists_its_topics(graph):
+    from duckielib.ros.dtros import NodeHealth, TopicType
+
+    seen = {}
+
+    class Detector(DTROS):
+        def __init__(self):
+            super().__init__(node_name="detector", node_type=NodeType.PERCEPTION)
+            self.pub = rospy.Publisher(
+                "~detections", String, queue_size=1, dt_topic_type=TopicType.PERCEPTION,
+                dt_help="what it found",
+            )  # fmt: skip
+            self.sub = rospy.Subscriber("~image", String, lambda msg: None, queue_size=1)
+            seen["rate"] = rospy.get_param("~rate", 5, dt_help="detections a second")
+
+    def node():
+        detector = Detector()
+        detector.set_health(NodeHealth.WARNING, "no image yet")
+        seen["pubs"] = [publisher.name for publisher in detector.publishers]
+        seen["subs"] = [subscriber.name for subscriber in detector.subscribers]
+        seen["health"] = detector.health
+        with pytest.raises(TypeError, match="unexpected keyword argument 'help'"):
+            rospy.get_param("~rate", 5, help="not rospy's")
+
+    graph.launch(node)
+    graph.run(0.1)
+    assert seen == {
+        "rate": 5,
+        "pubs": ["/detector/detections"],
+        "subs": ["/detector/image"],
+        "health": NodeHealth.WARNING,
+    }
+
+
+def test_a_plain_script_calls_a_service_without_init_node(graph):
+    from duckielib.messages import std_srvs
+
+    def server():
+        rospy.init_node("server")
+        rospy.Service("/ready", std_srvs.srv.Trigger, lambda request: (True, "yes"))
+        rospy.spin()
+
+    graph.launch(server)
+    graph.run(0.1)
+    # As a script that calls `rosservice`-like, with no node of its own (rospy allows it).
+    answer = rospy.ServiceProxy("/ready", std_srvs.srv.Trigger)()
+    assert (answer.success, answer.message) == (True, "yes")
+
+
+def test_duckietown_utils_helpers_import_from_the_librarys_modules():
+    from duckielib.ros.modules import modules_installed
+
+    with modules_installed(replace_real=True):
+        from duckietown_utils import jpg
+        from duckietown_utils.jpg import bgr_from_jpg
+        from duckietown_utils.yaml_wrap import yaml_load_file
+
+        assert jpg.bgr_from_jpg is bgr_from_jpg
+        assert callable(yaml_load_file)

@@ -213,6 +213,7 @@ def _flat(name: str, doc: str, **own: object) -> types.ModuleType:
     """A module of rospy's (``rospy.rostime``...): its own names, then every name of rospy's."""
     module = types.ModuleType(f"rospy.{name}", doc)
     module.__dict__.update(own)
+    module.__dict__["_duckielib_alias"] = True  # uninstall_modules knows it as ours
 
     def rospy_name(attr: str) -> object:
         if attr in globals() and not attr.startswith("_"):

@@ -194,12 +194,19 @@ def _param_name(name: str) -> str:
     return node.resolve_param(name)
 
 
-def get_param(param_name: str, default: Any = _UNSET) -> Any:
+def get_param(param_name: str, default: Any = _UNSET, **dt_options: Any) -> Any:
     """A parameter's value (a namespace gives a dict).
+
+    ``dt_help=``, ``dt_type=`` and the other ``dt_`` options Duckietown's rospy takes are
+    accepted and change nothing.
 
     Raises:
         KeyError: if it is not set and no default is given.
+        TypeError: for a keyword argument that is not a ``dt_`` option.
     """
+    unknown = [key for key in dt_options if not key.startswith("dt_")]
+    if unknown:
+        raise TypeError(f"get_param() got an unexpected keyword argument {unknown[0]!r}")
     name = _param_name(param_name)
     try:
         return current_graph().get_param(name)

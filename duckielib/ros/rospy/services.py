@@ -20,6 +20,7 @@ from duckielib.ros.exceptions import (
     ROSSerializationException,
     ServiceException,
 )
+from duckielib.ros.graph import current_graph
 from duckielib.ros.log import ERROR, format_error
 from duckielib.ros.node import Node, ServiceRecord
 from duckielib.ros.rospy.client import spin
@@ -104,6 +105,11 @@ def _response_from(value: Any, response_class: Type[Message]) -> Any:
         raise ServiceException(f"handler returned invalid value: {error}") from None
 
 
+#: The node a script's service calls come from when it never called ``init_node`` (rospy
+#: lets a plain script call a service).
+_SCRIPT_CLIENT = "rospy_script"
+
+
 class ServiceProxy:
     """Call a service as a function: ``proxy(request)`` or ``proxy(field=value, ...)``.
 
@@ -131,6 +137,17 @@ class ServiceProxy:
         self._node = node
         self.resolved_name = self.name = node.resolve(self.name)
 
+    def _caller(self) -> Node:
+        """The calling node; a script that never called ``init_node`` calls as rospy lets it."""
+        node: Optional[Node] = getattr(self, "_node", None)
+        if node is None:
+            graph = current_graph()
+            node = graph.nodes.get("/" + _SCRIPT_CLIENT)
+            if node is None or node.is_shutdown:
+                node = graph.host_node(_SCRIPT_CLIENT)
+            self._attach(node)
+        return node
+
     def wait_for_service(self, timeout: Optional[float] = None) -> None:
         """Wait until the service is offered (see :func:`wait_for_service`)."""
         wait_for_service(self.resolved_name, timeout)
@@ -149,7 +166,8 @@ class ServiceProxy:
         if self._closed:
             raise ServiceException(f"service [{self.name}] proxy was closed")
         request = _to_message(self.request_class, args, kwds)
-        record: Optional[ServiceRecord] = self._node.graph.services.get(self.name)
+        caller = self._caller()
+        record: Optional[ServiceRecord] = caller.graph.services.get(self.name)
         if record is None:
             raise ServiceException(f"service [{self.name}] unavailable")
         if record.service_class._md5sum != self.service_class._md5sum:
@@ -164,7 +182,7 @@ class ServiceProxy:
         record.call_count += 1
         if self._called is not record:  # the proxy's node is the caller, as in ROS
             self._called = record
-            self._node.graph.history.add_client(self._node, record)
+            caller.graph.history.add_client(caller, record)
         with node_context(record.node):
             try:
                 response = _response_from(
