@@ -99,15 +99,14 @@ class Workspace:
     """
 
     def __init__(self, root: PathLike) -> None:
-        import rospkg
-
         self.root = Path(root).resolve()
         search = self.root / "packages" if (self.root / "packages").is_dir() else self.root
-        crawled = rospkg.RosPack(ros_paths=[str(search)])
         self.packages: Dict[str, Package] = {}
-        for name in sorted(crawled.list()):
-            folder = Path(crawled.get_path(name))
-            self.packages[name] = Package(name, folder, _python_folders(folder))
+        for folder in _package_folders(search):
+            name = _package_name(folder)
+            if name not in self.packages:  # the first found wins, as in a catkin workspace
+                self.packages[name] = Package(name, folder, _python_folders(folder))
+        self.packages = dict(sorted(self.packages.items()))
         if not self.packages:
             raise ProjectError(
                 f"{self.root} holds no catkin package (a folder with a package.xml): give the "
@@ -182,6 +181,31 @@ class Workspace:
             for name in list(sys.modules):
                 if name.partition(".")[0] in self.packages:
                     del sys.modules[name]
+
+
+def _package_folders(search: Path) -> List[Path]:
+    """The catkin packages under ``search``, found as catkin crawls for them.
+
+    A folder with a ``package.xml`` is a package (nothing below it is searched); a folder with
+    ``CATKIN_IGNORE`` is skipped.
+    """
+    found: List[Path] = []
+    for folder, subfolders, files in os.walk(search):
+        if "CATKIN_IGNORE" in files:
+            subfolders.clear()
+        elif "package.xml" in files:
+            found.append(Path(folder))
+            subfolders.clear()
+        else:
+            subfolders[:] = sorted(each for each in subfolders if not each.startswith("."))
+    return found
+
+
+def _package_name(folder: Path) -> str:
+    """A package's name, from its ``package.xml`` (its folder's name if it says none)."""
+    text = (folder / "package.xml").read_text(encoding="utf-8", errors="replace")
+    match = re.search(r"<name>\s*([^<\s]+)\s*</name>", text)
+    return match[1] if match else folder.name
 
 
 def _python_folders(folder: Path) -> Tuple[Path, ...]:
