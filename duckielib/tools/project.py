@@ -947,6 +947,17 @@ def _install_hint(module: str, workspace: Workspace) -> str:
                     f"build installs on the robot: install it here too, with "
                     f"'.venv/bin/pip install {requirement}'."
                 )
+    apt = workspace.root / "dependencies-apt.txt"
+    if apt.is_file():
+        ros_name = "-" + module.replace("_", "-").lower()
+        for line in apt.read_text(encoding="utf-8", errors="replace").splitlines():
+            package = line.split("#", 1)[0].strip()
+            if package.startswith("ros-") and package.endswith(ros_name):
+                return (
+                    f"The project installs it on the robot from dependencies-apt.txt "
+                    f"({package}), a ROS package the virtual Duckiebot does not serve: copy "
+                    "what the node needs of it into the project, or run this node on the robot."
+                )
     return (
         f"If {module} is a library your robot's image installs, install it here too "
         "(.venv/bin/pip install ...)."

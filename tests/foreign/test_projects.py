@@ -147,6 +147,15 @@ def test_a_project_that_cannot_run_is_said_with_its_file_and_line(tmp_path, monk
         r"too, with '\.venv/bin/pip install tag-finder>=3\.1'\.",
     ):
         run_project(broken, out=tmp_path / "run2")
+    node.write_text(node.read_text().replace("import tag_finder", "import image_geometry"))
+    (broken / "dependencies-apt.txt").write_text("ros-noetic-image-geometry\n")
+    with pytest.raises(
+        ProjectError,
+        match=r"No module named 'image_geometry'\. The project installs it on the robot from "
+        r"dependencies-apt\.txt \(ros-noetic-image-geometry\), a ROS package the virtual "
+        r"Duckiebot does not serve",
+    ):
+        run_project(broken, out=tmp_path / "run3")
     launcher = broken / "launchers/default.sh"
     launcher.write_text(launcher.read_text() + "dt-exec make everything\n")
     with pytest.raises(ProjectError, match=r"default\.sh, line 13 runs 'make'"):
