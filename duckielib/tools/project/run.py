@@ -1,0 +1,255 @@
+"""A project's nodes run on the virtual Duckiebot, and what the run did.
+
+Laptop side; never deployed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import re
+import sys
+import time
+import traceback
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Dict, List, Optional
+
+from duckielib.tools.project.launch import NodeSpec, launched_nodes
+from duckielib.tools.project.workspace import PathLike, ProjectError, Workspace
+from duckielib.tools.robot_env import node_clocks, robot_data, windows_saved
+
+__all__ = ["ProjectRun", "run_project"]
+
+#: Topics a run does not record: the camera's images (about 30 large messages a second).
+_NOT_RECORDED = r".*/camera_node/image/compressed"
+
+
+@dataclass
+class ProjectRun:
+    """What a run of a project did.
+
+    Attributes:
+        folder: the run's folder (``run.bag``, ``log.txt``, ``summary.json``).
+        nodes: each node's name and how it ended (``"running"`` when the run ended first).
+        topics: messages recorded, by topic.
+        notes: what the launch files held that the run left out.
+        simulated: simulated seconds.
+        wall: wall-clock seconds.
+    """
+
+    folder: Path
+    nodes: Dict[str, str]
+    topics: Dict[str, int]
+    notes: List[str]
+    simulated: float
+    wall: float
+
+    @property
+    def files(self) -> Dict[str, Path]:
+        """The run's files, by kind."""
+        return {
+            "bag": self.folder / "run.bag",
+            "log": self.folder / "log.txt",
+            "summary": self.folder / "summary.json",
+        }
+
+    def text(self) -> str:
+        """What ``duckie run`` prints: the nodes, the topics they published, the files."""
+        lines = [f"ran {len(self.nodes)} node(s) for {self.simulated:.1f} s (simulated):"]
+        width = max(len(name) for name in self.nodes)
+        lines += [f"  {name:<{width}}  {how}" for name, how in self.nodes.items()]
+        lines.append("recorded:")
+        width = max((len(topic) for topic in self.topics), default=0)
+        lines += [f"  {topic:<{width}}  {count}" for topic, count in self.topics.items()]
+        lines += [f"note: {note}" for note in self.notes]
+        data = sorted(path for path in (self.folder / "data").rglob("*") if path.is_file())
+        if data:
+            lines.append(
+                f"the nodes wrote {len(data)} file(s) to the robot's /data: they are in "
+                f"{self.folder / 'data'}"
+            )
+        lines.append(f"wrote run.bag, log.txt, summary.json in {self.folder}")
+        return "\n".join(lines)
+
+    def summary(self) -> Dict[str, Any]:
+        """The run as JSON-ready data."""
+        return {
+            "nodes": self.nodes,
+            "topics": self.topics,
+            "notes": self.notes,
+            "simulated_s": round(self.simulated, 3),
+            "wall_s": round(self.wall, 3),
+        }
+
+
+def _node_main(spec: NodeSpec, run: Any, ended: Dict[str, str]) -> Any:
+    """A node's main code that notes in ``ended`` whether it ended or failed."""
+
+    def node_main() -> None:
+        try:
+            run()
+            ended[spec.label] = "ended"
+        except BaseException:
+            ended[spec.label] = "failed"
+            raise
+
+    node_main.__name__ = run.__name__
+    return node_main
+
+
+def _how_it_ended(how: Optional[str], spec: NodeSpec, simulated: float, seconds: float) -> str:
+    if how == "ended":
+        return "ended" + (" (required: the run ended with it)" if spec.required else "")
+    if how == "failed":
+        return "failed (its traceback is in log.txt)"
+    if simulated >= seconds - 1e-6:
+        return f"still running after {seconds:g} s, stopped"
+    return "running, stopped when the run ended"
+
+
+def run_project(
+    path: PathLike,
+    launcher: str = "default",
+    noise: Any = "ideal",
+    seed: int = 0,
+    seconds: float = 30.0,
+    out: PathLike = "runs/project",
+) -> ProjectRun:
+    """Run a Duckietown project's nodes on the virtual Duckiebot for ``seconds``.
+
+    The run's bag (every topic but the camera's images), ``log.txt`` and ``summary.json`` are
+    written in ``out``; what the nodes write to the robot's ``/data`` lands in ``out/data``,
+    and the frames they show with ``cv2.imshow`` in ``out/windows`` (:mod:`.robot_env`). It
+    ends after ``seconds`` of simulated time, or when a ``required`` node ends, or when every
+    node has ended; the wheels are stopped in every case.
+
+    Raises:
+        ProjectError: for a project, launcher or launch file that cannot be run (the file and
+            line said), or a node that fails when it starts.
+    """
+    from duckielib.bags import BagRecorder
+    from duckielib.ros import Graph, node_script
+    from duckielib.ros.graph import NodeCrashed
+    from duckielib.ros.modules import modules_installed
+    from duckielib.sim import VirtualDuckiebot
+    from duckielib.sim.world import OPEN_MAT
+
+    os.environ.setdefault("VEHICLE_NAME", "duckiebot")
+    workspace, launched = launched_nodes(path, launcher)
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    files = {"bag": folder / "run.bag", "log": folder / "log.txt"}
+    for each in files.values():
+        each.unlink(missing_ok=True)
+    graph = Graph(echo_logs=False)
+    bot = VirtualDuckiebot(seed=seed, noise=noise, graph=graph, world=OPEN_MAT)
+    for name, value in launched.params.items():
+        graph.set_param(name, value)
+    ended: Dict[str, str] = {}
+    wall = time.perf_counter()
+    path_before = list(sys.path)  # node scripts put their folders first, as on the robot
+    notes = list(launched.notes)
+    with contextlib.ExitStack() as robot:
+        robot.enter_context(workspace.importable())
+        robot.enter_context(modules_installed(replace_real=True))
+        robot.enter_context(robot_data(folder / "data"))
+        robot.enter_context(node_clocks(workspace.root, lambda: graph.time))
+        robot.enter_context(windows_saved(folder / "windows", notes))
+        for spec in launched.nodes:
+            bot.launch(
+                _node_main(spec, node_script(spec.script, *spec.args), ended),
+                name=spec.name,
+                namespace=spec.namespace,
+                remap=spec.remap or None,
+                params=spec.params or None,
+            )
+        recorder = BagRecorder(files["bag"], graph=graph, exclude=_NOT_RECORDED)
+        required = [spec.label for spec in launched.nodes if spec.required]
+
+        def over() -> bool:
+            if any(label in ended for label in required):
+                return True
+            return len(ended) == len(launched.nodes)
+
+        crash: Optional[BaseException] = None
+        try:
+            bot.run_until(over, seconds)
+        except NodeCrashed as error:
+            crash = error
+        finally:
+            at_end = dict(ended)
+            bot.shutdown()
+            recorder.close()
+            files["log"].write_text(
+                "\n".join(repr(record) for record in graph.log) + "\n", encoding="utf-8"
+            )
+            sys.path[:] = path_before
+    run = ProjectRun(
+        folder=folder,
+        nodes={
+            spec.label: _how_it_ended(at_end.get(spec.label), spec, bot.time, seconds)
+            for spec in launched.nodes
+        },
+        topics=dict(sorted(recorder.counts.items())),
+        notes=notes,
+        simulated=bot.time,
+        wall=time.perf_counter() - wall,
+    )
+    (folder / "summary.json").write_text(json.dumps(run.summary(), indent=2) + "\n")
+    if crash is not None:
+        raise ProjectError(
+            f"{_crash_said(crash, workspace)} The run's bag and log are in {folder}."
+        )
+    return run
+
+
+def _crash_said(crash: BaseException, workspace: Workspace) -> str:
+    """A node's crash in a sentence, at the project's own line that raised."""
+    cause = crash.__cause__ or crash
+    node = str(getattr(crash, "node", "")).rsplit("/", 1)[-1] or "a node"
+    frames = [
+        frame
+        for frame in traceback.extract_tb(cause.__traceback__)
+        if workspace.root in Path(frame.filename).resolve().parents
+    ]
+    at = ""
+    if frames:
+        frame = frames[-1]
+        at = f" at {Path(frame.filename).relative_to(workspace.root)}, line {frame.lineno}"
+    said = f"The node {node} stopped with {type(cause).__name__}{at}: {cause}."
+    if isinstance(cause, ModuleNotFoundError) and cause.name:
+        said += " " + _install_hint(cause.name.partition(".")[0], workspace)
+    return said
+
+
+def _install_hint(module: str, workspace: Workspace) -> str:
+    """How to get a module a node imports: from the project's ``dependencies-py3.txt``."""
+    listed = workspace.root / "dependencies-py3.txt"
+    wanted = re.sub(r"[-_.]+", "_", module).lower()
+    if listed.is_file():
+        for line in listed.read_text(encoding="utf-8", errors="replace").splitlines():
+            requirement = line.split("#", 1)[0].strip()
+            name = re.split(r"[\s<>=!~;\[]", requirement, maxsplit=1)[0]
+            if name and re.sub(r"[-_.]+", "_", name).lower() == wanted:
+                return (
+                    f"The project lists {requirement} in dependencies-py3.txt, which dts devel "
+                    f"build installs on the robot: install it here too, with "
+                    f"'.venv/bin/pip install {requirement}'."
+                )
+    apt = workspace.root / "dependencies-apt.txt"
+    if apt.is_file():
+        ros_name = "-" + module.replace("_", "-").lower()
+        for line in apt.read_text(encoding="utf-8", errors="replace").splitlines():
+            package = line.split("#", 1)[0].strip()
+            if package.startswith("ros-") and package.endswith(ros_name):
+                return (
+                    f"The project installs it on the robot from dependencies-apt.txt "
+                    f"({package}), a ROS package the virtual Duckiebot does not serve: copy "
+                    "what the node needs of it into the project, or run this node on the robot."
+                )
+    return (
+        f"If {module} is a library your robot's image installs, install it here too "
+        "(.venv/bin/pip install ...)."
+    )
