@@ -32,6 +32,17 @@ from typing import Dict
 
 __all__ = ["MODULES"]
 
+#: Modules of Duckietown's library that nodes import helpers from (``duckietown_utils.jpg``):
+#: :mod:`.duckietown_utils` stands for each.
+DUCKIETOWN_UTILS_MODULES = (
+    "jpg",
+    "yaml_wrap",
+    "image_conversions",
+    "file_utils",
+    "exceptions",
+    "exception_utils",
+)
+
 #: The names robot code imports, each with the module of this package that stands for it.
 #: A dotted name is a submodule robot code also imports (``from rosbag.bag import Bag``):
 #: the same module as its package's, or one its package's module holds as an attribute
@@ -49,13 +60,6 @@ MODULES: Dict[str, str] = {
     # The library's own modules, where nodes import its helpers from (one module here).
     **{
         f"duckietown_utils.{name}": "duckielib.libraries.duckietown_utils"
-        for name in (
-            "jpg",
-            "yaml_wrap",
-            "image_conversions",
-            "file_utils",
-            "exceptions",
-            "exception_utils",
-        )
+        for name in DUCKIETOWN_UTILS_MODULES
     },
 }

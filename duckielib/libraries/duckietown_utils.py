@@ -28,6 +28,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from duckielib.libraries import DUCKIETOWN_UTILS_MODULES
+
 __all__ = [
     "DTBadData",
     "DTConfigException",
@@ -236,21 +238,10 @@ def d8_compressed_image_from_cv_image(
     return msg
 
 
-#: Modules of Duckietown's library that nodes import helpers from: this module stands for each.
-SUBMODULES = (
-    "jpg",
-    "yaml_wrap",
-    "image_conversions",
-    "file_utils",
-    "exceptions",
-    "exception_utils",
-)
-
-
 def __getattr__(name: str) -> Any:
     if name.startswith("__"):
         raise AttributeError(name)
-    if name in SUBMODULES:  # duckietown_utils.jpg is this module
+    if name in DUCKIETOWN_UTILS_MODULES:  # duckietown_utils.jpg is this module
         return sys.modules[__name__]
     raise AttributeError(
         f"duckietown_utils.{name} is not on the virtual Duckiebot: only the helpers nodes use "

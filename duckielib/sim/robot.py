@@ -11,9 +11,8 @@ offset being what overcomes the gearbox's friction (so duty 1 gives k = 27 rad/s
 rest stays at rest below the noise profile's breakaway PWM (static friction). A noise profile
 may give a measured speed curve instead of that linear law (``speed_curve``), and a ground that
 resists turning while the robot rolls (``turning_scrub``, ``turning_resistance``,
-:func:`loaded_speeds`): both
-wheels' targets then come from both motors. The speed follows its target with a first-order lag
-of time constant :data:`MOTOR_TIME_CONSTANT_S`.
+:func:`loaded_speeds`): both wheels' targets then come from both motors. The speed follows its
+target with a first-order lag of time constant :data:`MOTOR_TIME_CONSTANT_S`.
 
 Tyres: each wheel is a velocity constraint between the chassis at the wheel's contact point and
 a kinematic "ground" body moving at the wheel's rim speed along the heading. Its force is capped

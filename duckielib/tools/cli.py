@@ -297,15 +297,7 @@ def _add_run(commands: argparse._SubParsersAction) -> None:
         default="default",
         help="the launcher to run, launchers/NAME.sh (default: default)",
     )
-    run.add_argument(
-        "--noise",
-        default="ideal",
-        type=_noise,
-        help="the simulated robot: ideal (default), realistic, or a profile file",
-    )
-    run.add_argument(
-        "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
-    )
+    _add_robot_options(run)
     run.add_argument(
         "--seconds",
         type=_seconds,
@@ -363,16 +355,7 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         choices=sorted(MISSIONS),
         help="which mission to drive (default: square_then_circle)",
     )
-    mission.add_argument(
-        "--noise",
-        default="ideal",
-        type=_noise,
-        help="the simulated robot: ideal (default), realistic (motors, wheels and drift as "
-        "measured on real DB21s), or a profile file duckie calibrate wrote",
-    )
-    mission.add_argument(
-        "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
-    )
+    _add_robot_options(mission)
     mission.add_argument(
         "--stop-color", type=_pattern, help="the LED pattern of the stops (default: RED)"
     )
@@ -397,6 +380,20 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         "topics and services, as the grader does",
     )
     mission.set_defaults(handler=_mission)
+
+
+def _add_robot_options(parser: argparse.ArgumentParser) -> None:
+    """``--noise`` and ``--seed``: which virtual Duckiebot a command drives."""
+    parser.add_argument(
+        "--noise",
+        default="ideal",
+        type=_noise,
+        help="the simulated robot: ideal (default), realistic (motors, wheels and drift as "
+        "measured on real DB21s), or a profile file duckie calibrate wrote",
+    )
+    parser.add_argument(
+        "--seed", type=_seed, default=0, help="the simulator's seed, 0 or more (default 0)"
+    )
 
 
 def _noise(text: str) -> str:

@@ -159,8 +159,6 @@ def windows_saved(folder: Path, notes: List[str]) -> Iterator[Dict[str, int]]:
     """
     import cv2
 
-    names = ("imshow", "namedWindow", "waitKey", "destroyWindow", "destroyAllWindows")
-    saved = {name: getattr(cv2, name) for name in names if hasattr(cv2, name)}
     shown: Dict[str, int] = {}
 
     def imshow(window: str, image: Any) -> None:
@@ -186,6 +184,7 @@ def windows_saved(folder: Path, notes: List[str]) -> Iterator[Dict[str, int]]:
         "destroyWindow": nothing,
         "destroyAllWindows": nothing,
     }
+    saved = {name: getattr(cv2, name) for name in standing_in if hasattr(cv2, name)}
     try:
         for name, function in standing_in.items():
             setattr(cv2, name, function)

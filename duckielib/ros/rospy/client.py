@@ -149,11 +149,6 @@ def get_published_topics(namespace: str = "/") -> List[List[str]]:
     ]
 
 
-def is_shutdown_requested() -> bool:
-    """Whether the calling node was asked to shut down (as :func:`is_shutdown` here)."""
-    return is_shutdown()
-
-
 def is_shutdown() -> bool:
     """Whether the calling node is shutting down (a loop's signal to stop)."""
     try:

@@ -197,8 +197,11 @@ _TIME_SLEEP_NOTE = (
 )
 
 
-def _sleeping_node() -> Optional[Node]:
-    """The in-process node whose code calls ``time.sleep``, or None (then it is wall time)."""
+def calling_node() -> Optional[Node]:
+    """The in-process node whose code is running now (its main code or a callback), or None.
+
+    ``time.sleep`` waits simulated time in such code only (else it is wall time).
+    """
     stack = node_stack()
     if stack:
         return stack[-1]  # a callback
@@ -210,13 +213,8 @@ def _sleeping_node() -> Optional[Node]:
     return None
 
 
-def calling_node() -> Optional[Node]:
-    """The in-process node whose code is running now (its main code or a callback), or None."""
-    return _sleeping_node()
-
-
 def _time_sleep(seconds: Any) -> None:
-    node = _sleeping_node()
+    node = calling_node()
     if node is None or node.is_shutdown:
         _WALL_SLEEP(seconds)
         return

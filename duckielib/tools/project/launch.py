@@ -407,16 +407,9 @@ def _launch_file(workspace: Workspace, words: List[str], where: str) -> Tuple[Pa
     raise ProjectError(f"{where}: roslaunch needs a package and a launch file.")
 
 
-def _assignments(words: List[str], where: str) -> Tuple[Dict[str, str], List[str]]:
-    """``name:=value`` words apart from the others."""
-    given, rest = {}, []
-    for word in words:
-        name, sep, value = word.partition(":=")
-        if sep:
-            given[name] = value
-        else:
-            rest.append(word)
-    return given, rest
+def _assignments(words: List[str]) -> Dict[str, str]:
+    """The ``name:=value`` words of a command line, by name."""
+    return {name: value for name, sep, value in (word.partition(":=") for word in words) if sep}
 
 
 def launched_nodes(path: PathLike, launcher: str = "default") -> Tuple[Workspace, Launched]:
@@ -498,8 +491,7 @@ def _launcher_line(
     if command == "roslaunch":
         rest = [word for word in rest if not word.startswith("--")]
         launch, rest = _launch_file(workspace, rest, where)
-        given, _ = _assignments(rest, where)
-        reader.read(launch.resolve(), given)
+        reader.read(launch.resolve(), _assignments(rest))
     elif command == "rosrun" and len(rest) >= 2:
         script = workspace.executable(rest[0], rest[1])
         reader.launched.nodes.append(_script_node(workspace, script, rest[2:], where))

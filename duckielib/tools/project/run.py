@@ -26,6 +26,15 @@ __all__ = ["ProjectRun", "run_project"]
 _NOT_RECORDED = r".*/camera_node/image/compressed"
 
 
+def _run_files(folder: Path) -> Dict[str, Path]:
+    """A run's files in its folder, by kind."""
+    return {
+        "bag": folder / "run.bag",
+        "log": folder / "log.txt",
+        "summary": folder / "summary.json",
+    }
+
+
 @dataclass
 class ProjectRun:
     """What a run of a project did.
@@ -49,11 +58,7 @@ class ProjectRun:
     @property
     def files(self) -> Dict[str, Path]:
         """The run's files, by kind."""
-        return {
-            "bag": self.folder / "run.bag",
-            "log": self.folder / "log.txt",
-            "summary": self.folder / "summary.json",
-        }
+        return _run_files(self.folder)
 
     def text(self) -> str:
         """What ``duckie run`` prints: the nodes, the topics they published, the files."""
@@ -140,7 +145,7 @@ def run_project(
     workspace, launched = launched_nodes(path, launcher)
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-    files = {"bag": folder / "run.bag", "log": folder / "log.txt"}
+    files = _run_files(folder)
     for each in files.values():
         each.unlink(missing_ok=True)
     graph = Graph(echo_logs=False)
@@ -197,7 +202,7 @@ def run_project(
         simulated=bot.time,
         wall=time.perf_counter() - wall,
     )
-    (folder / "summary.json").write_text(json.dumps(run.summary(), indent=2) + "\n")
+    files["summary"].write_text(json.dumps(run.summary(), indent=2) + "\n")
     if crash is not None:
         raise ProjectError(
             f"{_crash_said(crash, workspace)} The run's bag and log are in {folder}."
