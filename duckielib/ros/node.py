@@ -65,6 +65,9 @@ class TopicRecord:
         self.message_count = 0
         self._header: Dict[str, str] = {}
         self._header_key: Tuple[Any, ...] = ()
+        #: The publisher whose message is being handed to the subscribers (None: a message
+        #: from outside the graph).
+        self.sender: Any = None
 
     @property
     def type(self) -> str:
@@ -96,6 +99,27 @@ class TopicRecord:
             "callerid": callers[0] if callers else "",
             "latching": "1" if any(publisher.latch for publisher in self.publishers) else "0",
         }
+
+    def delivery_header(self) -> Dict[str, str]:
+        """The connection header of the message being delivered now.
+
+        As in rospy, each publisher's connection has its own header: its node as ``callerid``,
+        its ``latching``, and the ``headers`` it was created with (which may override the
+        others). A message from outside the graph gets the topic's shared header.
+        """
+        sender = self.sender
+        if sender is None:
+            return self.shared_connection_header()
+        header: Optional[Dict[str, str]] = getattr(sender, "_connection_header", None)
+        if header is None or header.get("topic") != self.name:
+            header = {
+                **self._make_connection_header(),
+                "callerid": sender.node.name,
+                "latching": "1" if sender.latch else "0",
+                **sender.headers,
+            }
+            sender._connection_header = header
+        return header
 
     def check_type(self, data_class: Type[Message], role: str, node: str) -> None:
         """Refuse a publisher or subscriber whose message type differs from the topic's.

@@ -41,6 +41,7 @@ FOREIGN_IMPORTS = (
     "rospy",
     "sensor_msgs",
     "std_msgs",
+    "std_srvs",
 )
 
 
@@ -78,6 +79,17 @@ def test_the_tutorial_service_with_its_packages_own_srv(bot):
     bot.graph.launch(node_script(NODES / "add_two_ints_client.py", "2", "40"))
     bot.run(1.0)
     assert "2 + 40 = 42" in [r.text for r in lines(bot.graph)]
+    assert not lines(bot.graph, ERROR)
+
+
+def test_connection_headers_of_each_publisher_and_service_client(bot):
+    # tests/real_ros/test_foreign_on_real_rospy.py runs the same pair under Debian's rospy.
+    bot.graph.launch(node_script(NODES / "tagged_talker.py"))
+    bot.graph.launch(node_script(NODES / "tagged_listener.py"))
+    bot.run(1.0)
+    said = [r.text for r in lines(bot.graph)]
+    assert "status ready from /tagged_talker as leader of fleet 7 (latching 1)" in said
+    assert "service says: /tagged_listener with token abc123 (answered by /tagged_talker)" in said
     assert not lines(bot.graph, ERROR)
 
 

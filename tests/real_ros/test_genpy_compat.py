@@ -118,3 +118,50 @@ def test_a_generated_class_of_another_definition_is_refused_with_a_sentence(ros_
     with pytest.raises(ValueError, match=r"Put its \.msg file in the msg/ folder"):
         rospy.Subscriber("reading", unknown, print)
     graph.shutdown()
+
+
+@pytest.fixture(scope="module")
+def generate_service(ros_import):
+    """Make a service module as a catkin build does: genpy's code for a ``.srv`` text."""
+    genmsg = ros_import("genmsg")
+    loader = ros_import("genmsg.msg_loader")
+    generator = ros_import("genpy.generator")
+
+    def make(full_name: str, text: str, uses=()):
+        context = genmsg.MsgContext.create_default()
+        for used in uses:
+            loader.load_msg_from_string(context, messages.definition(used), used)
+        spec = loader.load_srv_from_string(context, text, full_name)
+        module: dict = {}
+        exec("\n".join(generator.srv_generator(context, spec, {})), module)
+        return module
+
+    return make
+
+
+def test_service_classes_genpy_generated_work_on_the_graph(generate_service):
+    from duckielib.ros import Graph, rospy
+
+    text = messages.definition("duckietown_msgs/ChangePattern")
+    generated = generate_service("duckietown_msgs/ChangePattern", text, ["std_msgs/String"])
+    service, response = generated["ChangePattern"], generated["ChangePatternResponse"]
+    graph = Graph(stdout=io.StringIO())
+    rospy.init_node("generated")
+    asked = []
+    rospy.Service("set_pattern", service, lambda req: asked.append(req) or response())
+    answer = rospy.ServiceProxy("set_pattern", service)(generated["ChangePatternRequest"]())
+    assert answer._type == "duckietown_msgs/ChangePatternResponse"
+    assert len(asked) == 1
+    assert asked[0]._connection_header["callerid"] == "/generated"
+    graph.shutdown()
+
+
+def test_a_generated_service_of_a_type_unknown_is_refused_with_a_sentence(generate_service):
+    from duckielib.ros import Graph, rospy
+
+    generated = generate_service("my_pkg/AddTwoInts", "int64 a\nint64 b\n---\nint64 sum\n")
+    graph = Graph(stdout=io.StringIO())
+    rospy.init_node("generated")
+    with pytest.raises(ValueError, match=r"Put its \.srv file in the srv/ folder"):
+        rospy.Service("add", generated["AddTwoInts"], print)
+    graph.shutdown()

@@ -178,6 +178,39 @@ def test_a_received_message_carries_its_connection_header(graph):
     assert header["latching"] == "1"
 
 
+def test_each_publishers_messages_carry_its_own_connection_header(graph):
+    # As in rospy: one connection per publisher, each with its node and the headers it gave.
+    heard = []
+
+    def talker(name, role, latch):
+        def main():
+            rospy.init_node(name)
+            pub = rospy.Publisher(
+                "chatter", String, queue_size=1, latch=latch, headers={"role": role}
+            )
+            rospy.sleep(0.05)
+            pub.publish(String(data=name))
+            rospy.spin()
+
+        return main
+
+    graph.launch(talker("left", "scout", latch=False))
+    graph.launch(talker("right", "leader", latch=True))
+    rospy.init_node("listener")
+    rospy.Subscriber("chatter", String, heard.append)
+    graph.run(0.1)
+    seen = sorted(
+        (
+            msg.data,
+            msg._connection_header["callerid"],
+            msg._connection_header["role"],
+            msg._connection_header["latching"],
+        )
+        for msg in heard
+    )
+    assert seen == [("left", "/left", "scout", "0"), ("right", "/right", "leader", "1")]
+
+
 def test_throttled_identical_logs_say_what_changed_or_what_stayed_a_while(graph):
     def node():
         rospy.init_node("counter")

@@ -5,10 +5,10 @@ Pure: standard library only, Python 3.8 (deployed to the robot).
 
 from __future__ import annotations
 
-from typing import Any, Callable, Optional, Type
+from typing import Any, Callable, Dict, Optional, Type
 
-from duckielib.errors import MessageError
-from duckielib.messages import Message
+from duckielib.errors import MessageError, UnknownTypeError
+from duckielib.messages import Message, get_service_class
 from duckielib.messages import Service as ServiceType
 from duckielib.ros.context import (
     current_node,
@@ -30,11 +30,38 @@ from duckielib.ros.rospy.topics import _to_message
 
 
 # -- services -----------------------------------------------------------------------------------
-def _check_service_class(service_class: Any, what: str) -> None:
+def _course_service_class(service_class: Any, what: str) -> Any:
+    """The class to use for ``service_class``: itself, or the course's class of its type.
+
+    A class generated elsewhere (by genpy, in a catkin build) is replaced by the course's class
+    of the same type and definition, as topics do with message classes.
+
+    Raises:
+        ValueError: if it is not a service class, or one generated elsewhere of a type the
+            course does not know or with another definition (another md5 sum).
+    """
     if not (isinstance(service_class, type) and hasattr(service_class, "_request_class")):
         raise ValueError(
             f"{what} needs a service class such as ChangePattern, not {service_class!r}."
         )
+    if hasattr(service_class._request_class, "from_bytes"):
+        return service_class  # the course's own
+    name = str(getattr(service_class, "_type", service_class.__name__))
+    try:
+        ours = get_service_class(name)
+    except UnknownTypeError:
+        raise ValueError(
+            f"{what}: {name} comes from a module generated outside this course, for a type the "
+            "course does not know. Put its .srv file in the srv/ folder of your package, beside "
+            "your node, and import it from there."
+        ) from None
+    theirs = getattr(service_class, "_md5sum", "?")
+    if ours._md5sum != theirs:
+        raise ValueError(
+            f"{what}: your {name} has another definition than the robot's (md5 sum "
+            f"{theirs}, the robot's is {ours._md5sum}); use the robot's definition."
+        )
+    return ours
 
 
 class Service:
@@ -53,7 +80,7 @@ class Service:
         buff_size: int = 65536,
         error_handler: Optional[Callable[..., Any]] = None,
     ) -> None:
-        _check_service_class(service_class, "rospy.Service")
+        service_class = _course_service_class(service_class, "rospy.Service")
         self._node: Node = current_node("rospy.Service")
         self.resolved_name = self.name = self._node.resolve(name)
         self.service_class = service_class
@@ -90,6 +117,8 @@ class Service:
 def _response_from(value: Any, response_class: Type[Message]) -> Any:
     if isinstance(value, Message) and value._type == response_class._type:
         return value
+    if getattr(value, "_md5sum", None) == response_class._md5sum:
+        return _to_message(response_class, (value,), {})  # a response generated elsewhere
     if isinstance(value, dict):
         try:
             return response_class(**value)
@@ -123,13 +152,19 @@ class ServiceProxy:
         persistent: bool = False,
         headers: Any = None,
     ) -> None:
-        _check_service_class(service_class, "rospy.ServiceProxy")
+        service_class = _course_service_class(service_class, "rospy.ServiceProxy")
         self.resolved_name = self.name = name  # resolved once the node exists
         _node_or_later(self._attach)
         self.service_class = service_class
         self.request_class = service_class._request_class
         self.response_class = service_class._response_class
         self.persistent = persistent
+        #: The connection header the service's handler sees with each request, as in rospy.
+        self.headers: Dict[str, str] = {
+            str(key): str(value) for key, value in (headers or {}).items()
+        }
+        if persistent:
+            self.headers["persistent"] = "1"
         self._closed = False
         self._called: Optional[ServiceRecord] = None  # the service last called, for the history
 
@@ -179,6 +214,12 @@ class ServiceProxy:
             sent = record.service_class._request_class.from_bytes(request.to_bytes())
         except MessageError as error:
             raise ROSSerializationException(str(error)) from None
+        sent._connection_header = {
+            "service": self.name,
+            "md5sum": self.service_class._md5sum,
+            "callerid": caller.name,
+            **self.headers,
+        }
         record.call_count += 1
         if self._called is not record:  # the proxy's node is the caller, as in ROS
             self._called = record
@@ -199,7 +240,14 @@ class ServiceProxy:
                         ERROR, f"Error processing request: {error}\n{format_error(error)}"
                     )
                 raise ServiceException(f"error processing request: {error}") from None
-        return self.response_class.from_bytes(data)
+        response = self.response_class.from_bytes(data)
+        response._connection_header = {
+            "service": self.name,
+            "type": record.type,
+            "md5sum": record.service_class._md5sum,
+            "callerid": record.node.name,
+        }
+        return response
 
     def close(self) -> None:
         """Close a persistent connection."""

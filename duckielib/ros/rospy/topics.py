@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import collections
 import io
-from typing import Any, Callable, Deque, List, Optional, Type, Union, cast
+from typing import Any, Callable, Deque, Dict, List, Optional, Tuple, Type, Union, cast
 
 from duckielib.errors import MessageError, UnknownTypeError
 from duckielib.messages import Message
@@ -176,6 +176,10 @@ class Publisher:
         self.type = data_class._type
         self.md5sum = data_class._md5sum
         self.latch = latch
+        #: Extra connection-header fields, as rospy sends them to each subscriber.
+        self.headers: Dict[str, str] = {
+            str(key): str(value) for key, value in (headers or {}).items()
+        }
         self.queue_size = queue_size
         self.subscriber_listener: Optional[SubscribeListener] = subscriber_listener
         self._seq = 0
@@ -235,8 +239,12 @@ class Publisher:
         record.message_count += 1
         if self.latch:
             record.latched[self] = data
-        for subscriber in list(record.subscribers):
-            subscriber._enqueue(data)
+        record.sender = self
+        try:
+            for subscriber in list(record.subscribers):
+                subscriber._enqueue(data)
+        finally:
+            record.sender = None
         _spend(self._node)
 
     def get_num_connections(self) -> int:
@@ -287,7 +295,10 @@ class Subscriber:
         self.callback = callback
         self.callback_args = callback_args
         self.queue_size = queue_size
-        self._queue: Deque[bytes] = collections.deque(maxlen=queue_size or None)
+        #: Messages waiting for the callback, each with its connection's header.
+        self._queue: Deque[Tuple[bytes, Dict[str, str]]] = collections.deque(
+            maxlen=queue_size or None
+        )
         self._scheduled = False
         self.dropped = 0
         self._record: Optional[TopicRecord] = None
@@ -304,8 +315,13 @@ class Subscriber:
         node.graph.history.add_topic_user(node, self._record, publishes=False)
         for watch in node.graph.topic_watchers:
             watch(self, False)
-        for data in self._record.latched.values():
-            self._enqueue(data)
+        record = self._record
+        for publisher, data in list(record.latched.items()):
+            record.sender = publisher
+            try:
+                self._enqueue(data)
+            finally:
+                record.sender = None
         for publisher in list(self._record.publishers):
             listener = publisher.subscriber_listener
             if listener is not None:
@@ -315,8 +331,14 @@ class Subscriber:
         """Publish from ``publisher`` to this subscriber only (a listener's ``peer_publish``)."""
 
         def peer_publish(message: Any) -> None:
-            if self._record is not None:
-                self._enqueue(_to_message(publisher.data_class, (message,), {}).to_bytes())
+            record = self._record
+            if record is not None:
+                data = _to_message(publisher.data_class, (message,), {}).to_bytes()
+                record.sender = publisher
+                try:
+                    self._enqueue(data)
+                finally:
+                    record.sender = None
 
         return peer_publish
 
@@ -328,7 +350,8 @@ class Subscriber:
     def _enqueue(self, data: bytes) -> None:
         if self._queue.maxlen is not None and len(self._queue) == self._queue.maxlen:
             self.dropped += 1
-        self._queue.append(data)
+        record = self._record
+        self._queue.append((data, record.delivery_header() if record is not None else {}))
         if not self._scheduled:
             self._scheduled = True
             self._node.graph.call_soon(self._drain)
@@ -346,8 +369,9 @@ class Subscriber:
         queue = self._queue
         stack = node_stack()
         while queue and self._record is not None:
-            message = self.data_class.from_bytes(queue.popleft())
-            message._connection_header = self._record.shared_connection_header()
+            data, header = queue.popleft()
+            message = self.data_class.from_bytes(data)
+            message._connection_header = header
             if self.callback is None:
                 continue
             stack.append(self._node)  # the callback runs as its node
