@@ -269,14 +269,20 @@ def _mission(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     from duckielib.tools.project import run_project
 
-    run = run_project(
-        args.path,
-        launcher=args.launcher,
-        noise=args.noise,
-        seed=args.seed,
-        seconds=args.seconds,
-        out=args.out,
-    )
+    try:
+        run = run_project(
+            args.path,
+            launcher=args.launcher,
+            noise=args.noise,
+            seed=args.seed,
+            seconds=args.seconds,
+            out=args.out,
+        )
+    except KeyboardInterrupt as stopped:  # the run's files are written: say what ran
+        interrupted = getattr(stopped, "run", None)
+        if interrupted is not None:
+            print(interrupted.text())
+        raise
     print(run.text())
     return 0
 

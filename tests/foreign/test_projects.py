@@ -16,6 +16,8 @@ import json
 import math
 import os
 import shutil
+import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -225,3 +227,61 @@ def test_launcher_arguments_reach_an_undeclared_arg_and_shell_lines_are_read(tmp
     )
     _, launched = launched_nodes(copy)
     assert launched.nodes[1].params["laps"] == 3
+
+
+DRIVE_FOREVER = """\
+#!/usr/bin/env python3
+import os
+import rospy
+from duckietown_msgs.msg import WheelsCmdStamped
+
+rospy.init_node("drive_forever")
+topic = "/%s/wheels_driver_node/wheels_cmd" % os.environ["VEHICLE_NAME"]
+pub = rospy.Publisher(topic, WheelsCmdStamped, queue_size=1)
+rate = rospy.Rate(10)
+while not rospy.is_shutdown():
+    pub.publish(WheelsCmdStamped(vel_left=0.3, vel_right=0.3))
+    rate.sleep()
+"""
+
+
+def test_ctrl_c_stops_a_run_with_its_wheels_at_zero_and_its_files_whole(tmp_path):
+    package = tmp_path / "project" / "packages" / "driver"
+    (package / "src").mkdir(parents=True)
+    (package / "package.xml").write_text(
+        '<?xml version="1.0"?>\n<package format="2"><name>driver</name><version>0.1.0'
+        "</version><description>drives</description><maintainer email='a@b.c'>a</maintainer>"
+        "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n"
+    )
+    script = package / "src" / "drive_forever.py"
+    script.write_text(DRIVE_FOREVER)
+    out = tmp_path / "run"
+    command = [sys.executable, "-m", "duckielib.tools.cli", "run", str(script)]
+    process = subprocess.Popen(
+        [*command, "--seconds", "1e6", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    recording = out / "run.bag.active"
+    deadline = time.monotonic() + 60
+    while not (recording.exists() and recording.stat().st_size > 200_000):
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline, "the run never started recording"
+        time.sleep(0.1)
+    process.send_signal(signal.SIGINT)
+    stdout, stderr = process.communicate(timeout=60)
+    assert process.returncode == 130, stderr
+    assert stderr.strip() == "duckie: interrupted."
+    assert "stopped by Ctrl-C:" in stdout.splitlines()[0]
+    assert "/drive_forever  running, stopped by Ctrl-C" in stdout
+    assert "the wheels were stopped: duty cycles 0, 0 at the end" in stdout
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["interrupted"] is True
+    assert summary["wheels_at_end"] == [0.0, 0.0]
+    assert not recording.exists()
+    bag = Bag(out / "run.bag")
+    commands = bag.read("/duckiebot/wheels_driver_node/wheels_cmd")
+    assert len(commands) == summary["topics"]["/duckiebot/wheels_driver_node/wheels_cmd"] > 100
+    assert commands[-1].message.vel_left == pytest.approx(0.3)
+    assert bag.check() is None

@@ -14,7 +14,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Dict, List, Optional
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
 from duckielib.tools.project.launch import NodeSpec, launched_nodes
 from duckielib.tools.project.workspace import PathLike, ProjectError, Workspace
@@ -46,6 +46,8 @@ class ProjectRun:
         notes: what the launch files held that the run left out.
         simulated: simulated seconds.
         wall: wall-clock seconds.
+        wheels: the wheels' duty cycles (left, right) once the run had stopped the robot.
+        interrupted: whether Ctrl-C (or SIGTERM) ended the run.
     """
 
     folder: Path
@@ -54,6 +56,8 @@ class ProjectRun:
     notes: List[str]
     simulated: float
     wall: float
+    wheels: Tuple[float, float] = (0.0, 0.0)
+    interrupted: bool = False
 
     @property
     def files(self) -> Dict[str, Path]:
@@ -62,7 +66,8 @@ class ProjectRun:
 
     def text(self) -> str:
         """What ``duckie run`` prints: the nodes, the topics they published, the files."""
-        lines = [f"ran {len(self.nodes)} node(s) for {self.simulated:.1f} s (simulated):"]
+        ended = ", stopped by Ctrl-C" if self.interrupted else ""
+        lines = [f"ran {len(self.nodes)} node(s) for {self.simulated:.1f} s (simulated){ended}:"]
         width = max(len(name) for name in self.nodes)
         lines += [f"  {name:<{width}}  {how}" for name, how in self.nodes.items()]
         lines.append("recorded:")
@@ -75,6 +80,8 @@ class ProjectRun:
                 f"the nodes wrote {len(data)} file(s) to the robot's /data: they are in "
                 f"{self.folder / 'data'}"
             )
+        left, right = self.wheels
+        lines.append(f"the wheels were stopped: duty cycles {left:g}, {right:g} at the end")
         lines.append(f"wrote run.bag, log.txt, summary.json in {self.folder}")
         return "\n".join(lines)
 
@@ -86,6 +93,8 @@ class ProjectRun:
             "notes": self.notes,
             "simulated_s": round(self.simulated, 3),
             "wall_s": round(self.wall, 3),
+            "wheels_at_end": list(self.wheels),
+            "interrupted": self.interrupted,
         }
 
 
@@ -96,6 +105,8 @@ def _node_main(spec: NodeSpec, run: Any, ended: Dict[str, str]) -> Any:
         try:
             run()
             ended[spec.label] = "ended"
+        except KeyboardInterrupt:
+            raise  # Ctrl-C landed in the node's code: the run stops, the node did not fail
         except BaseException:
             ended[spec.label] = "failed"
             raise
@@ -104,14 +115,34 @@ def _node_main(spec: NodeSpec, run: Any, ended: Dict[str, str]) -> Any:
     return node_main
 
 
-def _how_it_ended(how: Optional[str], spec: NodeSpec, simulated: float, seconds: float) -> str:
+def _how_it_ended(
+    how: Optional[str], spec: NodeSpec, simulated: float, seconds: float, interrupted: bool
+) -> str:
     if how == "ended":
         return "ended" + (" (required: the run ended with it)" if spec.required else "")
     if how == "failed":
         return "failed (its traceback is in log.txt)"
+    if interrupted:
+        return "running, stopped by Ctrl-C"
     if simulated >= seconds - 1e-6:
         return f"still running after {seconds:g} s, stopped"
     return "running, stopped when the run ended"
+
+
+@contextlib.contextmanager
+def _as_on_the_robot(
+    workspace: Workspace, folder: Path, clock: Callable[[], float], notes: List[str]
+) -> Iterator[None]:
+    """What node code finds as on the robot: its packages, rospy, /data, clocks, windows."""
+    from duckielib.ros.modules import modules_installed
+
+    with contextlib.ExitStack() as robot:
+        robot.enter_context(workspace.importable())
+        robot.enter_context(modules_installed(replace_real=True))
+        robot.enter_context(robot_data(folder / "data"))
+        robot.enter_context(node_clocks(workspace.root, clock))
+        robot.enter_context(windows_saved(folder / "windows", notes))
+        yield
 
 
 def run_project(
@@ -137,7 +168,6 @@ def run_project(
     from duckielib.bags import BagRecorder
     from duckielib.ros import Graph, node_script
     from duckielib.ros.graph import NodeCrashed
-    from duckielib.ros.modules import modules_installed
     from duckielib.sim import VirtualDuckiebot
     from duckielib.sim.world import OPEN_MAT
 
@@ -156,12 +186,7 @@ def run_project(
     wall = time.perf_counter()
     path_before = list(sys.path)  # node scripts put their folders first, as on the robot
     notes = list(launched.notes)
-    with contextlib.ExitStack() as robot:
-        robot.enter_context(workspace.importable())
-        robot.enter_context(modules_installed(replace_real=True))
-        robot.enter_context(robot_data(folder / "data"))
-        robot.enter_context(node_clocks(workspace.root, lambda: graph.time))
-        robot.enter_context(windows_saved(folder / "windows", notes))
+    with _as_on_the_robot(workspace, folder, lambda: graph.time, notes):
         for spec in launched.nodes:
             bot.launch(
                 _node_main(spec, node_script(spec.script, *spec.args), ended),
@@ -179,10 +204,13 @@ def run_project(
             return len(ended) == len(launched.nodes)
 
         crash: Optional[BaseException] = None
+        interrupt: Optional[KeyboardInterrupt] = None
         try:
             bot.run_until(over, seconds)
         except NodeCrashed as error:
             crash = error
+        except KeyboardInterrupt as error:  # Ctrl-C: stop as at the end, then say so
+            interrupt = error
         finally:
             at_end = dict(ended)
             bot.shutdown()
@@ -194,15 +222,22 @@ def run_project(
     run = ProjectRun(
         folder=folder,
         nodes={
-            spec.label: _how_it_ended(at_end.get(spec.label), spec, bot.time, seconds)
+            spec.label: _how_it_ended(
+                at_end.get(spec.label), spec, bot.time, seconds, interrupt is not None
+            )
             for spec in launched.nodes
         },
         topics=dict(sorted(recorder.counts.items())),
         notes=notes,
         simulated=bot.time,
         wall=time.perf_counter() - wall,
+        wheels=bot.sim.wheel_duties,
+        interrupted=interrupt is not None,
     )
     files["summary"].write_text(json.dumps(run.summary(), indent=2) + "\n")
+    if interrupt is not None:
+        interrupt.run = run  # type: ignore[attr-defined]  # what ran, for the command to print
+        raise interrupt
     if crash is not None:
         raise ProjectError(
             f"{_crash_said(crash, workspace)} The run's bag and log are in {folder}."
