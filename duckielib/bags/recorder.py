@@ -174,6 +174,16 @@ class BagRecorder:
         self._write_pending()
         return dict(self._counts)
 
+    def add(self, topic: str) -> None:
+        """Record ``topic`` (a global name) from now on, its next message included.
+
+        A recorder of all topics finds a new topic within 0.1 simulated seconds, as
+        ``rosbag record -a`` polls the master; a publisher that knows it starts a topic calls
+        this to lose none of its first messages.
+        """
+        if not self.closed:
+            self._subscribe(names.canonical(names.resolve(topic, "/")))
+
     def _subscribe(self, topic: str) -> None:
         if topic in self._subscribed:
             return

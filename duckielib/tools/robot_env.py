@@ -11,7 +11,9 @@
   ``time.time()`` sees the dt it would see on the robot. Libraries and everything outside the
   nodes keep the wall clock.
 - **Windows**: ``cv2.imshow`` shows no window here; each window's latest frame is saved as
-  ``OUT/windows/NAME.png``, and the run says so once. ``cv2.waitKey`` returns -1 (no key).
+  ``OUT/windows/NAME.png``, every frame goes into the run's bag as the image topic
+  ``/cv2_windows/NAME/compressed`` (which ``ImageView.from_bag`` plays in a notebook), and the
+  run says so once. ``cv2.waitKey`` returns -1 (no key).
 
 Laptop side; never deployed.
 """
@@ -26,9 +28,9 @@ import re
 import sys
 import time
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterator, List
+from typing import Any, Callable, Dict, Iterator, List, Optional
 
-__all__ = ["node_clocks", "robot_data", "windows_saved"]
+__all__ = ["node_clocks", "robot_data", "window_topic", "windows_saved"]
 
 #: The robot's data volume, as nodes name it.
 ROBOT_DATA = "/data"
@@ -151,25 +153,45 @@ def node_clocks(root: Path, simulated: Callable[[], float]) -> Iterator[None]:
             setattr(time, name, wall)
 
 
+def window_topic(window: str) -> str:
+    """The topic of a ``cv2`` window's frames in a run: ``/cv2_windows/NAME/compressed``."""
+    name = re.sub(r"[^A-Za-z0-9_]+", "_", str(window)).strip("_") or "window"
+    return f"/cv2_windows/{name}/compressed"
+
+
 @contextlib.contextmanager
-def windows_saved(folder: Path, notes: List[str]) -> Iterator[Dict[str, int]]:
+def windows_saved(
+    folder: Path, notes: List[str], publish: Optional[Callable[[str, bytes], None]] = None
+) -> Iterator[Dict[str, int]]:
     """While inside, ``cv2``'s windows save their frames in ``folder``; yields frames by window.
 
-    The first frame shown adds a sentence to ``notes``.
+    Each window's latest frame is ``folder/NAME.png``; with ``publish``, every frame is also
+    handed to ``publish(topic, jpeg)`` (the topic of :func:`window_topic`), so a run's bag
+    holds the window as an image topic that ``ImageView.from_bag`` plays. The first frame
+    shown adds a sentence to ``notes``.
     """
     import cv2
+    import numpy as np
 
     shown: Dict[str, int] = {}
 
     def imshow(window: str, image: Any) -> None:
         if not shown:
             folder.mkdir(parents=True, exist_ok=True)
-            notes.append(
-                f"cv2.imshow shows no window here: each window's latest frame is saved in {folder}."
-            )
+            where = f"each window's latest frame is saved in {folder}"
+            if publish is not None:
+                where += ", and all its frames are in run.bag on /cv2_windows/NAME/compressed"
+            notes.append(f"cv2.imshow shows no window here: {where}.")
         shown[window] = shown.get(window, 0) + 1
+        frame = np.asarray(image)
+        if frame.dtype.kind == "f":  # imshow shows floats as 0..1, as 8-bit images 0..255
+            frame = (np.clip(frame, 0.0, 1.0) * 255).round().astype(np.uint8)
         safe = re.sub(r"[^\w.-]+", "_", str(window)) or "window"
-        cv2.imwrite(str(folder / f"{safe}.png"), image)
+        cv2.imwrite(str(folder / f"{safe}.png"), frame)
+        if publish is not None:
+            encoded, jpeg = cv2.imencode(".jpg", frame)
+            if encoded:
+                publish(window_topic(window), jpeg.tobytes())
 
     def nothing(*args: Any, **kwargs: Any) -> None:
         return None

@@ -23,9 +23,11 @@ import time
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 
 from duckielib.bags import Bag, pose_tracks
+from duckielib.plots import ImageView
 from duckielib.ros import uninstall_modules
 from duckielib.tools.cli import main
 from duckielib.tools.project import ProjectError, Workspace, launched_nodes, run_project
@@ -194,8 +196,17 @@ def test_nodes_find_the_robots_data_its_clock_and_a_window(tmp_path, monkeypatch
     assert "[/duckiebot/camera_viewer]: showed 5 frames" in log
     assert run.notes == [
         "cv2.imshow shows no window here: each window's latest frame is saved in "
-        f"{tmp_path / 'run' / 'windows'}."
+        f"{tmp_path / 'run' / 'windows'}, and all its frames are in run.bag on "
+        "/cv2_windows/NAME/compressed."
     ]
+    # ... and every frame in the bag, where a notebook's image view plays the window.
+    shown = Bag(tmp_path / "run" / "run.bag").read("/cv2_windows/camera/compressed")
+    assert len(shown) == run.topics["/cv2_windows/camera/compressed"] == 5
+    assert cv2.imdecode(np.frombuffer(shown[0].message.data, np.uint8), 1).shape == (480, 640, 3)
+    assert [item.time for item in shown] == sorted(item.time for item in shown)
+    player = ImageView.from_bag(tmp_path / "run" / "run.bag")  # the window, not the camera
+    caption = player.children[0].children[2].value
+    assert caption.startswith("/cv2_windows/camera/compressed: frame 1 of 5, t = 0.03 s")
     assert "the nodes wrote 2 file(s) to the robot's /data" in run.text()
     # Outside the run, the wall clock, open() and cv2 are as they were.
     assert abs(time.time() - time.mktime(time.localtime())) < 2

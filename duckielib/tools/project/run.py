@@ -129,19 +129,47 @@ def _how_it_ended(
     return "running, stopped when the run ended"
 
 
+def _window_publisher(graph: Any, recorders: List[Any]) -> Callable[[str, bytes], None]:
+    """``publish(topic, jpeg)`` for ``cv2`` windows: a node ``cv2_windows`` publishes the frames.
+
+    Each window's topic is recorded by ``recorders`` from its first frame.
+    """
+    from duckielib.messages import CompressedImage
+    from duckielib.ros import rospy
+    from duckielib.ros.context import node_context
+
+    publishers: Dict[str, Any] = {}
+
+    def publish(topic: str, jpeg: bytes) -> None:
+        if topic not in publishers:
+            node = graph.nodes.get("/cv2_windows") or graph.host_node("cv2_windows")
+            with node_context(node):
+                publishers[topic] = rospy.Publisher(topic, CompressedImage, queue_size=1)
+            for recorder in recorders:
+                recorder.add(topic)
+        message = CompressedImage(format="jpeg", data=jpeg)
+        message.header.stamp = rospy.Time.from_sec(graph.time)
+        publishers[topic].publish(message)
+
+    return publish
+
+
 @contextlib.contextmanager
 def _as_on_the_robot(
-    workspace: Workspace, folder: Path, clock: Callable[[], float], notes: List[str]
+    workspace: Workspace, folder: Path, graph: Any, notes: List[str], recorders: List[Any]
 ) -> Iterator[None]:
     """What node code finds as on the robot: its packages, rospy, /data, clocks, windows."""
     from duckielib.ros.modules import modules_installed
+
+    clock: Callable[[], float] = lambda: graph.time  # noqa: E731
+    publish = _window_publisher(graph, recorders)
 
     with contextlib.ExitStack() as robot:
         robot.enter_context(workspace.importable())
         robot.enter_context(modules_installed(replace_real=True))
         robot.enter_context(robot_data(folder / "data"))
         robot.enter_context(node_clocks(workspace.root, clock))
-        robot.enter_context(windows_saved(folder / "windows", notes))
+        robot.enter_context(windows_saved(folder / "windows", notes, publish))
         yield
 
 
@@ -186,7 +214,8 @@ def run_project(
     wall = time.perf_counter()
     path_before = list(sys.path)  # node scripts put their folders first, as on the robot
     notes = list(launched.notes)
-    with _as_on_the_robot(workspace, folder, lambda: graph.time, notes):
+    recorders: List[BagRecorder] = []
+    with _as_on_the_robot(workspace, folder, graph, notes, recorders):
         for spec in launched.nodes:
             bot.launch(
                 _node_main(spec, node_script(spec.script, *spec.args), ended),
@@ -196,6 +225,7 @@ def run_project(
                 params=spec.params or None,
             )
         recorder = BagRecorder(files["bag"], graph=graph, exclude=_NOT_RECORDED)
+        recorders.append(recorder)
         required = [spec.label for spec in launched.nodes if spec.required]
 
         def over() -> bool:
