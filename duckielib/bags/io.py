@@ -25,12 +25,25 @@ from __future__ import annotations
 import contextlib
 import io
 import os
+import signal
 import struct
 import textwrap
+import threading
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
-from typing import Any, BinaryIO, Dict, Iterable, Iterator, List, Optional, Tuple, Union
+from typing import (
+    Any,
+    BinaryIO,
+    Callable,
+    Dict,
+    Iterable,
+    Iterator,
+    List,
+    Optional,
+    Tuple,
+    Union,
+)
 
 from rosbags.rosbag1 import Reader, Writer, WriterError
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
@@ -78,6 +91,40 @@ def rosbags_version() -> str:
         return metadata.version("rosbags")
     except metadata.PackageNotFoundError:  # pragma: no cover - rosbags run from a checkout
         return "(unknown version)"
+
+
+#: The signals a command ends on: Ctrl-C, and SIGTERM where ``duckie`` takes it.
+_ENDING_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextlib.contextmanager
+def uninterrupted() -> Iterator[None]:
+    """Let Ctrl-C (or SIGTERM) that comes while a bag is written wait until the write is whole.
+
+    A ``KeyboardInterrupt`` raised between two statements of a write could leave a chunk in
+    the file that the index never lists, or messages taken from a recorder's queue but never
+    written. Inside this block, in the main thread, those signals are noted; the handler that
+    was in place runs when the block ends (it raises ``KeyboardInterrupt`` then, as it would
+    have). Other threads never run signal handlers, so there the block changes nothing.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    handlers: Dict[int, Callable[[int, Any], Any]] = {}
+    for ending in _ENDING_SIGNALS:
+        handler = signal.getsignal(ending)
+        if callable(handler):
+            handlers[ending] = handler
+    pending: List[Tuple[int, Any]] = []
+    for taken in handlers:
+        signal.signal(taken, lambda got, frame: pending.append((got, frame)))
+    try:
+        yield
+    finally:
+        for taken, handler in handlers.items():
+            signal.signal(taken, handler)
+        for got, frame in pending[:1]:
+            handlers[got](got, frame)
 
 
 class RosbagsSeam:
@@ -897,16 +944,32 @@ class BagWriter:
         key = (topic, md5sum)
         connection = self._connections.get(key)
         if connection is None:
-            connection = self._writer.add_connection(
-                topic,
-                rosbags_type(message_type),
-                msgdef=message_definition,
-                md5sum=md5sum,
-                callerid=callerid,
-                latching=None if latching is None else int(latching),
-            )
-            self._connections[key] = connection
-            self._seam.register(connection)
+            with uninterrupted():
+                connection = self._add_connection(
+                    key, topic, message_type, md5sum, message_definition, callerid, latching
+                )
+        return connection
+
+    def _add_connection(
+        self,
+        key: Tuple[str, str],
+        topic: str,
+        message_type: str,
+        md5sum: str,
+        message_definition: str,
+        callerid: Optional[str],
+        latching: Optional[str],
+    ) -> Any:
+        connection = self._writer.add_connection(
+            topic,
+            rosbags_type(message_type),
+            msgdef=message_definition,
+            md5sum=md5sum,
+            callerid=callerid,
+            latching=None if latching is None else int(latching),
+        )
+        self._connections[key] = connection
+        self._seam.register(connection)
         return connection
 
     def write_connection(self, connection: Any, time_ns: int, data: bytes) -> None:
@@ -931,7 +994,8 @@ class BagWriter:
         """
         if self.closed:
             raise BagError(f"{self.path} is closed; open a new BagWriter to write more.")
-        self._seam.write_messages(items)
+        with uninterrupted():
+            self._seam.write_messages(items)
 
     def flush(self) -> None:
         """Write the messages buffered so far to disk as a chunk.
@@ -940,11 +1004,12 @@ class BagWriter:
         """
         if self.closed:
             return
-        self._seam.write_open_chunk()
-        file = self._seam.file
-        if file is not None:
-            file.flush()
-            os.fsync(file.fileno())
+        with uninterrupted():
+            self._seam.write_open_chunk()
+            file = self._seam.file
+            if file is not None:
+                file.flush()
+                os.fsync(file.fileno())
 
     def abandon(self) -> None:
         """Close the file without finishing the bag, after a failed write.
@@ -962,5 +1027,6 @@ class BagWriter:
         """Finish the bag: write the last chunk and the index. Closing twice does nothing."""
         if self.closed:
             return
-        self.closed = True
-        self._writer.close()
+        with uninterrupted():
+            self.closed = True
+            self._writer.close()

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 from typing import Any, Deque, Dict, Iterable, Optional, Tuple
 
-from duckielib.bags.io import BagWriter, PathLike
+from duckielib.bags.io import BagWriter, PathLike, uninterrupted
 from duckielib.errors import BagError
 from duckielib.ros import names
 from duckielib.ros.context import node_context
@@ -219,7 +219,7 @@ class BagRecorder:
                 return None
 
     def _write_pending(self) -> None:
-        with self._lock:
+        with uninterrupted(), self._lock:
             self._write_pending_locked()
 
     def _write_pending_locked(self) -> None:
@@ -295,23 +295,24 @@ class BagRecorder:
         self._stop.set()
         atexit.unregister(self._close_quietly)
         try:
-            with self._lock:
-                self._write_pending_locked()
-                self.closed = True
-                if self.error is not None:
-                    self._writer.abandon()
-                    return self.active_path
-                try:
-                    self._writer.close()
-                except Exception as error:
-                    self._fail(error, "the end")
-                    self._writer.abandon()
-                    raise BagError(
-                        f"Could not finish {self.path}: {self.error}. What reached the "
-                        f"disk is in {self.active_path}; duckie bag repair recovers it."
-                    ) from None
-            if self.active_path.exists():
-                self.active_path.replace(self.path)
+            with uninterrupted():  # a bag finished whole, under its own name
+                with self._lock:
+                    self._write_pending_locked()
+                    self.closed = True
+                    if self.error is not None:
+                        self._writer.abandon()
+                        return self.active_path
+                    try:
+                        self._writer.close()
+                    except Exception as error:
+                        self._fail(error, "the end")
+                        self._writer.abandon()
+                        raise BagError(
+                            f"Could not finish {self.path}: {self.error}. What reached the "
+                            f"disk is in {self.active_path}; duckie bag repair recovers it."
+                        ) from None
+                if self.active_path.exists():
+                    self.active_path.replace(self.path)
         finally:
             if not self._node.is_shutdown:
                 self._node.shutdown("the recording was closed")

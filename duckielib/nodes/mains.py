@@ -48,10 +48,18 @@ def _fail(node: str, text: str) -> None:
 
 
 def _real_rospy(node: str) -> Any:
-    """Import the real rospy (Debian's on a laptop, Noetic's on the robot)."""
+    """Import the real rospy (Debian's on a laptop, Noetic's on the robot).
+
+    Under ``duckie run``, which runs the project's nodes on the virtual Duckiebot, the node's
+    code runs on the in-process graph, whose rospy it takes, as every other node there does.
+    """
     from duckielib.ros.backend import is_in_process, use_debian_ros
+    from duckielib.ros.context import calling_actor
     from duckielib.ros.modules import provided_elsewhere
 
+    installed = sys.modules.get("rospy")
+    if calling_actor() is not None and installed is not None and is_in_process(installed):
+        return installed
     use_debian_ros()
     if "rospy" not in sys.modules and not provided_elsewhere("rospy"):
         _fail(node, "rospy is not installed here; on a laptop, install ROS 1 with `make ros`.")
@@ -176,10 +184,15 @@ def _connect_listeners(rospy: Any, topic: str, timeout: float = 3.0) -> Any:
     """
     import time
 
-    import rosgraph
     from std_msgs.msg import String
 
+    from duckielib.ros.backend import is_in_process
+
     publisher = rospy.Publisher(topic, String, queue_size=10)
+    if is_in_process(rospy):
+        return publisher  # on the in-process graph (duckie run), subscribers connect at once
+    import rosgraph
+
     name = publisher.resolved_name
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and not rospy.is_shutdown():

@@ -30,7 +30,10 @@ from duckielib.bags import Bag, pose_tracks
 from duckielib.plots import ImageView
 from duckielib.ros import uninstall_modules
 from duckielib.tools.cli import main
+from duckielib.tools.deploy import GENERATED, prepare
+from duckielib.tools.deploy import PROJECT as ROBOT_PROJECT
 from duckielib.tools.project import ProjectError, Workspace, launched_nodes, run_project
+from duckielib.tools.project.image import image_environment
 
 PROJECT = Path(__file__).resolve().parent / "projects" / "square_project"
 
@@ -104,7 +107,12 @@ def test_what_the_launch_files_say_is_read_as_roslaunch_reads_it(monkeypatch):
         "/duckiebot",
         {"side": 0.6},  # type="double", from the include's argument
     )
-    assert driver.params == {"speed": 0.2, "gains": {"k_omega": 2.0, "settle": 0.3}}
+    # $(eval ...): Python on the arguments (strings), by name or with arg().
+    assert driver.params == {
+        "speed": 0.2,
+        "long_side": True,
+        "gains": {"k_omega": 2.0, "settle": 0.3},
+    }
     assert driver.remap == {"car_cmd": "car_cmd_switch_node/cmd"}
     assert driver.required
     assert driver.where.endswith("square.launch, line 11")
@@ -296,3 +304,65 @@ def test_ctrl_c_stops_a_run_with_its_wheels_at_zero_and_its_files_whole(tmp_path
     assert len(commands) == summary["topics"]["/duckiebot/wheels_driver_node/wheels_cmd"] > 100
     assert commands[-1].message.vel_left == pytest.approx(0.3)
     assert bag.check() is None
+
+
+DOCKERFILE = """\
+ARG REPO_NAME="demo"
+ARG REPO_PATH="${CATKIN_WS_DIR}/src/${REPO_NAME}"
+FROM duckietown/dt-ros-commons:daffy-arm64v8
+ENV DT_MODULE_TYPE="${REPO_NAME}"
+ENV DT_REPO_PATH="${REPO_PATH}"
+COPY ./config /code/config
+COPY ./deploy/. /code/course
+# the library and the model, where the nodes find them
+ENV PYTHONPATH=/code/course${PYTHONPATH:+:${PYTHONPATH}}
+ENV GAINS=/code/config/gains.yaml \\
+    MODE=fast
+ENV MODEL /code/course/model.onnx
+ENV ROS_SHARE=/opt/ros/noetic/share
+"""
+
+
+def test_the_dockerfiles_env_is_set_with_the_image_paths_turned_into_the_projects(tmp_path):
+    (tmp_path / "Dockerfile").write_text(DOCKERFILE)
+    (tmp_path / "config").mkdir()
+    (tmp_path / "config" / "gains.yaml").write_text("k: 1\n")
+    (tmp_path / "deploy").mkdir()
+    image = image_environment(tmp_path)
+    assert image.variables == {
+        "DT_MODULE_TYPE": "demo",
+        "GAINS": str(tmp_path / "config" / "gains.yaml"),
+        "MODE": "fast",
+        "MODEL": str(tmp_path / "deploy" / "model.onnx"),
+    }  # DT_REPO_PATH (the base image's variable) and /opt/ros (not the project's) are left out
+    assert image.python_path == [tmp_path / "deploy"]
+    assert image.notes == [
+        "the Dockerfile sets MODEL=/code/course/model.onnx, the project's deploy/model.onnx in "
+        "the image, which does not exist yet."
+    ]
+    with image.applied():
+        assert os.environ["GAINS"] == str(tmp_path / "config" / "gains.yaml")
+        assert sys.path[-1] == str(tmp_path / "deploy")
+    assert "GAINS" not in os.environ
+    assert str(tmp_path / "deploy") not in sys.path
+
+
+def test_the_courses_own_robot_project_runs_as_its_image_runs_it(tmp_path):
+    # robot_nodes/ as a student has it after `duckie robot prepare`: its nodes find the
+    # solution through the Dockerfile's DUCKIE_SOLUTION, and take the virtual robot's rospy.
+    project = tmp_path / "robot_nodes"
+    shutil.copytree(ROBOT_PROJECT, project, ignore=shutil.ignore_patterns(*GENERATED))
+    with pytest.raises(ProjectError, match=r"exited with status 1 .* which does not exist yet"):
+        run_project(project, launcher="straight", out=tmp_path / "unprepared")
+    prepare(project=project, quiet=True)
+    run = run_project(project, launcher="straight", seconds=60, out=tmp_path / "run")
+    assert run.nodes["/duckiebot/mission_node"] == "ended (required: the run ended with it)"
+    states = [m.message.data for m in Bag(run.files["bag"]).read("/duckiebot/mission_node/state")]
+    assert states[0] == "wait"
+    assert states[-1] == "done"
+    (truth,) = [
+        t for t in pose_tracks(Bag(run.files["bag"]), "record") if "ground_truth" in t.label
+    ]
+    farthest = max(math.hypot(x - truth.x[0], y - truth.y[0]) for x, y in zip(truth.x, truth.y))
+    assert farthest == pytest.approx(1.25, abs=0.05)  # the task: 1.25 m out, then back
+    assert "DUCKIE_SOLUTION" not in os.environ

@@ -137,8 +137,64 @@ class _Scope:
 _SUBSTITUTION = re.compile(r"\$\((\w+)((?:\s+[^()\s]+)*)\s*\)")
 
 
+#: What ``$(eval ...)`` may call of Python's builtins, as roslaunch allows.
+_EVAL_BUILTINS = {"list": list, "dict": dict, "map": map, "str": str, "float": float, "int": int}
+
+
+def _auto(text: str) -> Any:
+    """An argument's value in ``$(eval)``, typed as roslaunch types it: number, bool or string."""
+    try:
+        if "." in text:
+            return float(text)
+        if "_" not in text:
+            return int(text)
+    except ValueError:
+        pass
+    if text.lower() in ("true", "false"):
+        return text.lower() == "true"
+    return text
+
+
+def _evaluate(expression: str, scope: _Scope, element: _Element, workspace: Workspace) -> str:
+    """``$(eval EXPRESSION)`` as roslaunch evaluates it: Python, with the arguments as names.
+
+    As in roslaunch, an argument's value is typed (``"0.6"`` is 0.6, ``"false"`` is False),
+    by its name and by ``arg('name')`` alike.
+    """
+
+    def arg(name: str) -> Any:
+        return _auto(_substitute(f"$(arg {name})", scope, element, workspace))
+
+    names: Dict[str, Any] = {
+        **{name: _auto(value) for name, value in scope.args.items()},
+        "arg": arg,
+        "find": lambda package: str(workspace.find(package)),
+        "env": lambda name: _substitute(f"$(env {name})", scope, element, workspace),
+        "optenv": lambda name, default="": os.environ.get(name, default),
+        "dirname": lambda: str(scope.file.parent),
+        "anon": lambda name: f"{name}_{os.getpid()}",
+        "true": True,
+        "false": False,
+    }
+    try:
+        value = eval(expression, {"__builtins__": _EVAL_BUILTINS}, names)
+    except ProjectError:
+        raise
+    except Exception as error:
+        raise ProjectError(
+            f"{scope.where(element)}: $(eval {expression}) fails: {type(error).__name__}: {error}."
+        ) from None
+    return str(value)
+
+
 def _substitute(text: str, scope: _Scope, element: _Element, workspace: Workspace) -> str:
-    """``text`` with its ``$(find ...)``, ``$(arg ...)``, ``$(env ...)``... resolved."""
+    """``text`` with its ``$(find ...)``, ``$(arg ...)``, ``$(env ...)``... resolved.
+
+    ``$(eval ...)`` is a Python expression; as in roslaunch it must be the whole value.
+    """
+    stripped = text.strip()
+    if stripped.startswith("$(eval ") and stripped.endswith(")"):
+        return _evaluate(stripped[len("$(eval ") : -1], scope, element, workspace)
 
     def one(match: re.Match[str]) -> str:
         command, words = match[1], match[2].split()
@@ -166,7 +222,8 @@ def _substitute(text: str, scope: _Scope, element: _Element, workspace: Workspac
             return f"{words[0]}_{os.getpid()}"
         raise ProjectError(
             f"{scope.where(element)} uses $({command}{match[2]}), which duckie run does not "
-            "resolve; it resolves $(find), $(arg), $(env), $(optenv), $(dirname) and $(anon)."
+            "resolve; it resolves $(find), $(arg), $(env), $(optenv), $(dirname), $(anon) and "
+            "$(eval) (as the whole value)."
         )
 
     return _SUBSTITUTION.sub(one, text)

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
+from duckielib.tools.project.image import ImageEnvironment, image_environment
 from duckielib.tools.project.launch import NodeSpec, launched_nodes
 from duckielib.tools.project.workspace import PathLike, ProjectError, Workspace
 from duckielib.tools.robot_env import node_clocks, robot_data, windows_saved
@@ -147,7 +148,7 @@ def _window_publisher(graph: Any, recorders: List[Any]) -> Callable[[str, bytes]
                 publishers[topic] = rospy.Publisher(topic, CompressedImage, queue_size=1)
             for recorder in recorders:
                 recorder.add(topic)
-        message = CompressedImage(format="jpeg", data=jpeg)
+        message: Any = CompressedImage(format="jpeg", data=jpeg)
         message.header.stamp = rospy.Time.from_sec(graph.time)
         publishers[topic].publish(message)
 
@@ -156,9 +157,14 @@ def _window_publisher(graph: Any, recorders: List[Any]) -> Callable[[str, bytes]
 
 @contextlib.contextmanager
 def _as_on_the_robot(
-    workspace: Workspace, folder: Path, graph: Any, notes: List[str], recorders: List[Any]
+    workspace: Workspace,
+    image: ImageEnvironment,
+    folder: Path,
+    graph: Any,
+    notes: List[str],
+    recorders: List[Any],
 ) -> Iterator[None]:
-    """What node code finds as on the robot: its packages, rospy, /data, clocks, windows."""
+    """What node code finds as on the robot: packages, image, rospy, /data, clocks, windows."""
     from duckielib.ros.modules import modules_installed
 
     clock: Callable[[], float] = lambda: graph.time  # noqa: E731
@@ -166,6 +172,7 @@ def _as_on_the_robot(
 
     with contextlib.ExitStack() as robot:
         robot.enter_context(workspace.importable())
+        robot.enter_context(image.applied())
         robot.enter_context(modules_installed(replace_real=True))
         robot.enter_context(robot_data(folder / "data"))
         robot.enter_context(node_clocks(workspace.root, clock))
@@ -213,9 +220,10 @@ def run_project(
     ended: Dict[str, str] = {}
     wall = time.perf_counter()
     path_before = list(sys.path)  # node scripts put their folders first, as on the robot
-    notes = list(launched.notes)
+    image = image_environment(workspace.root)
+    notes = [*launched.notes, *image.notes]
     recorders: List[BagRecorder] = []
-    with _as_on_the_robot(workspace, folder, graph, notes, recorders):
+    with _as_on_the_robot(workspace, image, folder, graph, notes, recorders):
         for spec in launched.nodes:
             bot.launch(
                 _node_main(spec, node_script(spec.script, *spec.args), ended),
@@ -265,14 +273,26 @@ def run_project(
         interrupted=interrupt is not None,
     )
     files["summary"].write_text(json.dumps(run.summary(), indent=2) + "\n")
+    _raise_how_it_stopped(run, interrupt, crash, workspace, image)
+    return run
+
+
+def _raise_how_it_stopped(
+    run: ProjectRun,
+    interrupt: Optional[KeyboardInterrupt],
+    crash: Optional[BaseException],
+    workspace: Workspace,
+    image: ImageEnvironment,
+) -> None:
+    """Raise Ctrl-C again (with the run, for the command to print) or a node's crash."""
     if interrupt is not None:
-        interrupt.run = run  # type: ignore[attr-defined]  # what ran, for the command to print
+        interrupt.run = run  # type: ignore[attr-defined]
         raise interrupt
     if crash is not None:
+        also = "".join(f" Note: {note[0].upper()}{note[1:]}" for note in image.notes)
         raise ProjectError(
-            f"{_crash_said(crash, workspace)} The run's bag and log are in {folder}."
+            f"{_crash_said(crash, workspace)} The run's bag and log are in {run.folder}.{also}"
         )
-    return run
 
 
 def _crash_said(crash: BaseException, workspace: Workspace) -> str:
@@ -288,7 +308,10 @@ def _crash_said(crash: BaseException, workspace: Workspace) -> str:
     if frames:
         frame = frames[-1]
         at = f" at {Path(frame.filename).relative_to(workspace.root)}, line {frame.lineno}"
-    said = f"The node {node} stopped with {type(cause).__name__}{at}: {cause}."
+    if isinstance(cause, SystemExit):
+        said = f"The node {node} exited with status {cause.code}{at} (it said why above)."
+    else:
+        said = f"The node {node} stopped with {type(cause).__name__}{at}: {cause}."
     if isinstance(cause, ModuleNotFoundError) and cause.name:
         said += " " + _install_hint(cause.name.partition(".")[0], workspace)
     return said
