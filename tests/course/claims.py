@@ -875,8 +875,7 @@ CLAIMS["07_control"] = [
         holds=lambda **n: (
             abs(n["p16_odometry"] - n["p16_really"]) > 3
             and n["pid_past"] < n["p16_past"]
-            and abs(n["pid_odometry"] - n["pid_really"])
-            < abs(n["p16_odometry"] - n["p16_really"])
+            and abs(n["pid_odometry"] - n["pid_really"]) < abs(n["p16_odometry"] - n["p16_really"])
             and n["p2_past"] == n["pi_past"] == 0
             and abs(n["p2_odometry"] - n["p2_really"]) < 1
             and abs(n["pi_odometry"] - n["pi_really"]) < 1
@@ -1456,6 +1455,35 @@ CLAIMS["10_bag_analysis"] += [
         ),
         meaning="on the calibrated robot the heading changes agree within 0.2 rad and the paths "
         "end within 30 cm, four times closer than on the realistic one or more",
+    ),
+]
+
+CLAIMS["11_to_the_robot"] += [
+    Claim(
+        says="the four nodes of `course.launch`, each in the robot's namespace `/duckiebot/`",
+        printed=r"ran (?P<nodes>\d+) node\(s\) for [^\n]*\n"
+        r"(?P<listed>(?:  /duckiebot/\w+ [^\n]*\n)+)",
+        holds=lambda nodes, listed: nodes == 4 and listed.count("/duckiebot/") == 4,
+        meaning="duckie run ran four nodes, all in /duckiebot/",
+    ),
+    Claim(
+        says="The mission node is `required`: when it ended, the run ended",
+        printed=r"/duckiebot/mission_node +(?P<how>ended \(required: the run ended with it\))",
+        holds=lambda how: how.startswith("ended"),
+        meaning="the required mission node ended and ended the run",
+    ),
+    Claim(
+        says="and the wheels were stopped",
+        printed=rf"the wheels were stopped: duty cycles (?P<left>{_NUMBER}), (?P<right>{_NUMBER})",
+        holds=lambda left, right: left == 0 and right == 0,
+        meaning="both wheels' duty cycles are 0 at the end of the run",
+    ),
+    Claim(
+        says="The note says which node of the launch file did not run: `rosbag record`",
+        printed=r"note: [^\n]*course\.launch, line \d+: node (?P<node>\w+) of package "
+        r"(?P<package>\w+) is not in this project",
+        holds=lambda node, package: (node, package) == ("record", "rosbag"),
+        meaning="the one node left out is rosbag's record",
     ),
 ]
 

@@ -403,9 +403,14 @@ class _LaunchReader:
         kind = self._needed(element, scope, "type")
         where = scope.where(element)
         if package not in self.workspace.packages:
+            why = (
+                "duckie run records every topic itself, into run.bag"
+                if package == "rosbag"
+                else "the virtual Duckiebot runs the robot's own drivers itself"
+            )
             self.launched.notes.append(
                 f"{where}: node {kind} of package {package} is not in this project and is left "
-                "out (the virtual Duckiebot runs the robot's own drivers itself)."
+                f"out ({why})."
             )
             return
         namespace = scope.namespace
