@@ -30,15 +30,16 @@ import threading
 import time
 from typing import Any, Callable, List, Optional
 
-from duckielib.ros.backend import message_classes
+from duckielib.ros.backend import is_in_process, message_classes
 
 __all__ = ["ENCODER_TIMEOUT_S", "SafetyGuard", "guarded_init"]
 
 #: How long the encoders may stay silent, in seconds of wall-clock time, before the guard
-#: engages the emergency stop.
+#: engages the emergency stop (on the in-process graph, simulated seconds).
 ENCODER_TIMEOUT_S = 0.5
 
-#: How long a stop keeps sending zero commands (wall-clock seconds).
+#: How long a stop keeps sending zero commands (wall-clock seconds; on the in-process graph,
+#: simulated seconds).
 _HOLD_S = 0.3
 
 
@@ -99,8 +100,23 @@ class SafetyGuard:
         self._errors = _CallbackErrors(self._on_callback_error)
         logging.getLogger("rosout").addHandler(self._errors)
         rospy.on_shutdown(self._on_shutdown)
-        self._watchdog = threading.Thread(target=self._watch, name="safety-watchdog", daemon=True)
-        self._watchdog.start()
+        # On the in-process graph (duckie run), the node lives on simulated time, run as fast
+        # as the laptop goes: its guard keeps that clock, so a run is the same each time.
+        self._simulated = is_in_process(rospy)
+        self._timer: Any = None
+        if self._simulated:
+            self._timer = rospy.Timer(
+                rospy.Duration(self.encoder_timeout / 5), lambda _event: self._check()
+            )
+        else:
+            self._watchdog = threading.Thread(
+                target=self._watch, name="safety-watchdog", daemon=True
+            )
+            self._watchdog.start()
+
+    def _now(self) -> float:
+        """The guard's clock: the wall clock, or the graph's simulated one (see above)."""
+        return float(self.rospy.get_time()) if self._simulated else time.monotonic()
 
     # -- the ways a node ends ------------------------------------------------------------------
     def run(self, main: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
@@ -127,11 +143,11 @@ class SafetyGuard:
         with self._lock:
             self.stops.append(reason)
         self.rospy.logwarn(f"Wheels stopped: {reason}.")
-        deadline = time.monotonic() + _HOLD_S
+        deadline = self._now() + _HOLD_S
         while True:
             self._publish_zero()
-            if time.monotonic() >= deadline:
-                break
+            if self._now() >= deadline or (self._simulated and self.rospy.is_shutdown()):
+                break  # (a graph that shut down has stopped its clock: once is the last word)
             time.sleep(0.05)
 
     def _publish_zero(self) -> None:
@@ -156,10 +172,12 @@ class SafetyGuard:
 
     def _stop_watching(self) -> None:
         self._ended.set()
+        if self._timer is not None:
+            self._timer.shutdown()
         logging.getLogger("rosout").removeHandler(self._errors)
 
     def _on_tick(self, _message: Any) -> None:
-        self._last_tick = time.monotonic()
+        self._last_tick = self._now()
         if self.estop_engaged:
             self._set_estop(False)
             self.rospy.loginfo("Encoder ticks are back: emergency stop released.")
@@ -180,12 +198,16 @@ class SafetyGuard:
 
     def _watch(self) -> None:
         while not self._ended.wait(self.encoder_timeout / 5):
-            if self._last_tick is None:
-                continue
-            silent = time.monotonic() - self._last_tick
-            if silent > self.encoder_timeout and not self.estop_engaged:
-                self._set_estop(True)
-                self.stop(f"no encoder tick for {silent:.1f} s")
+            self._check()
+
+    def _check(self) -> None:
+        """Engage the emergency stop if the encoders have been silent too long."""
+        if self._last_tick is None or self._ended.is_set():
+            return
+        silent = self._now() - self._last_tick
+        if silent > self.encoder_timeout and not self.estop_engaged:
+            self._set_estop(True)
+            self.stop(f"no encoder tick for {silent:.1f} s")
 
     def _set_estop(self, engaged: bool) -> None:
         self.estop_engaged = engaged
