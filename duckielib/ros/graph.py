@@ -781,9 +781,10 @@ class Graph(ParameterServer):
             threading.get_ident(),
         )
         launched = [actor.node for actor in self._actors if actor.node is not None]
+        for node in launched:  # every hook first: a hook may call another node's service
+            node.run_shutdown_hooks(reason)
         for node in launched:
-            if not node.is_shutdown:
-                node.shutdown(reason)
+            node.close()
         if driving and launched and not self.is_shutdown:
             with contextlib.suppress(DuckielibError, ROSException):  # already in the log
                 self._drive(self._now_ns, None)

@@ -248,6 +248,9 @@ class Node:
         self.services: List[ServiceRecord] = []
         self.timers: List[Any] = []
         self.shutdown_hooks: List[Callable[[], Any]] = []
+        #: Whether the node's shutdown hooks are running now, and whether it has closed.
+        self.in_shutdown_hooks = False
+        self.closed = False
         self.is_shutdown = False
         self.shutdown_reason: Optional[str] = None
         self._log_marks: Dict[Any, float] = {}
@@ -318,17 +321,38 @@ class Node:
     # -- shutdown ---------------------------------------------------------------------------
     def shutdown(self, reason: str) -> None:
         """Shut the node down: run its hooks, then close its topics, services and timers."""
+        self.run_shutdown_hooks(reason)
+        self.close()
+
+    def run_shutdown_hooks(self, reason: str) -> None:
+        """Mark the node shut down and run its hooks (once); its connections stay open.
+
+        A graph that shuts several nodes down runs every node's hooks before it closes any
+        node's topics and services, so that a hook may still call another node's service or
+        publish to its subscribers, as it may on a robot, where roslaunch signals every node
+        and each ends in its own time.
+        """
         if self.is_shutdown:
             return
         self.is_shutdown = True
         self.shutdown_reason = reason
         self.graph.node_shut_down()
-        with node_context(self):
-            for hook in list(self.shutdown_hooks):
-                try:
-                    hook()
-                except Exception as error:  # a broken hook must not stop the others
-                    self.log(ERROR, "shutdown hook failed:\n" + format_error(error))
+        self.in_shutdown_hooks = True
+        try:
+            with node_context(self):
+                for hook in list(self.shutdown_hooks):
+                    try:
+                        hook()
+                    except Exception as error:  # a broken hook must not stop the others
+                        self.log(ERROR, "shutdown hook failed:\n" + format_error(error))
+        finally:
+            self.in_shutdown_hooks = False
+
+    def close(self) -> None:
+        """Close the node's timers, topics and services, and leave the graph (once)."""
+        if self.closed:
+            return
+        self.closed = True
         for timer in list(self.timers):
             timer.shutdown()
         for publisher in list(self.publishers):

@@ -27,7 +27,7 @@ simulator_node              pub ``~ground_truth_pose`` (simulator only: no robot
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, ClassVar, Dict, Optional, Sequence, Tuple
 
 from duckielib import leds as led_tables
 from duckielib.config import RobotConfig
@@ -388,13 +388,28 @@ class CameraNode:
 
     Publishers:
         ~image/compressed (CompressedImage): ``format`` "jpeg", ``data`` the JPEG bytes.
+
+    Parameters (set as the robot's camera driver sets them, for nodes that read them):
+        ~framerate (30), ~res_w (640), ~res_h (480), ~exposure_mode ("sports"),
+        ~allow_partial_fov (False).
     """
+
+    #: The camera driver's parameters on a DB21 (daffy).
+    PARAMETERS: ClassVar[Dict[str, Any]] = {
+        "framerate": 30,
+        "res_w": 640,
+        "res_h": 480,
+        "exposure_mode": "sports",
+        "allow_partial_fov": False,
+    }
 
     def __init__(self, rospy: Any, sim: Simulator, veh: str) -> None:
         self.msg = message_classes(rospy)
         self.rospy = rospy
         self.sim = sim
         self.frame_id = veh.strip("/") + "/camera_optical_frame"
+        for name, value in self.PARAMETERS.items():
+            rospy.set_param(veh + "camera_node/" + name, value)
         self.pub_image = rospy.Publisher(
             veh + "camera_node/image/compressed", self.msg.CompressedImage, queue_size=1
         )

@@ -24,6 +24,7 @@ from __future__ import annotations
 import ast
 import importlib.util
 import shutil
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import List, Optional, Union
@@ -191,16 +192,29 @@ def _copy_library(deploy: Path) -> List[Path]:
 
 
 def _message_packages(folder: Path) -> Optional[str]:
-    """Generate genpy's message packages into ``folder``; a note if that is not possible."""
+    """Generate genpy's message packages into ``folder``; a note if that is not possible.
+
+    Debian's ROS packages are importable only while they are generated: the path and the
+    modules loaded from there are as before afterwards, so that a notebook (or a later
+    ``duckie run``) that prepared a robot project still meets the course's own rospy.
+    """
     from duckielib.ros import backend
 
-    if not (backend.use_debian_ros() and importlib.util.find_spec("genpy") is not None):
-        return (
-            "Debian's genpy is not installed, so deploy/msgs/ was not written: it is needed "
-            "only to run the nodes on this laptop (install ROS 1 with `make ros`)."
-        )
-    backend.generate_message_packages(folder)
-    return None
+    path_before, modules_before = list(sys.path), set(sys.modules)
+    try:
+        if not (backend.use_debian_ros() and importlib.util.find_spec("genpy") is not None):
+            return (
+                "Debian's genpy is not installed, so deploy/msgs/ was not written: it is "
+                "needed only to run the nodes on this laptop (install ROS 1 with `make ros`)."
+            )
+        backend.generate_message_packages(folder)
+        return None
+    finally:
+        sys.path[:] = path_before
+        for name in set(sys.modules) - modules_before:
+            where = str(getattr(sys.modules[name], "__file__", None) or "")
+            if where.startswith(backend.DEBIAN_DIST_PACKAGES):
+                del sys.modules[name]
 
 
 def _swap(new: Path, deploy: Path) -> None:

@@ -10,6 +10,9 @@
   clock, as ``time.sleep`` already waits simulated seconds: a controller that takes its dt from
   ``time.time()`` sees the dt it would see on the robot. Libraries and everything outside the
   nodes keep the wall clock.
+- **The host's name** is the robot's (``VEHICLE_NAME``) for ``socket.gethostname()``,
+  ``os.uname()`` and ``platform.node()`` called from the project's node code, as in a
+  container that shares the robot's network.
 - **Windows**: ``cv2.imshow`` shows no window here; each window's latest frame is saved as
   ``OUT/windows/NAME.png``, every frame goes into the run's bag as the image topic
   ``/cv2_windows/NAME/compressed`` (which ``ImageView.from_bag`` plays in a notebook), and the
@@ -30,7 +33,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional
 
-__all__ = ["node_clocks", "robot_data", "window_topic", "windows_saved"]
+__all__ = ["node_clocks", "robot_data", "robot_hostname", "window_topic", "windows_saved"]
 
 #: The robot's data volume, as nodes name it.
 ROBOT_DATA = "/data"
@@ -151,6 +154,47 @@ def node_clocks(root: Path, simulated: Callable[[], float]) -> Iterator[None]:
     finally:
         for name, wall in walls.items():
             setattr(time, name, wall)
+
+
+@contextlib.contextmanager
+def robot_hostname(root: Path, name: str) -> Iterator[None]:
+    """While inside, the project's node code finds the robot's name as the host's name.
+
+    On a Duckiebot the container shares the robot's network, and its host name is the
+    robot's name: nodes read it with ``socket.gethostname()``, ``os.uname()`` or
+    ``platform.node()`` (to build their topics' names, or to tell robots apart). Called from
+    the project's own files in a node's code, those give ``name``; elsewhere, the laptop's.
+    """
+    import platform
+    import socket
+
+    from duckielib.ros.rospy.timing import calling_node
+
+    prefix = str(root) + os.sep
+    laptop_hostname, laptop_uname, laptop_node = socket.gethostname, os.uname, platform.node
+
+    def in_node_code() -> bool:
+        caller = sys._getframe(2).f_code.co_filename
+        return caller.startswith(prefix) and calling_node() is not None
+
+    def gethostname() -> str:
+        return name if in_node_code() else laptop_hostname()
+
+    def uname() -> Any:
+        found = laptop_uname()
+        if not in_node_code():
+            return found
+        return os.uname_result((found.sysname, name, found.release, found.version, found.machine))
+
+    def node() -> str:
+        return name if in_node_code() else laptop_node()
+
+    try:
+        socket.gethostname, platform.node = gethostname, node
+        os.uname = uname
+        yield
+    finally:
+        socket.gethostname, os.uname, platform.node = laptop_hostname, laptop_uname, laptop_node
 
 
 def window_topic(window: str) -> str:

@@ -17,6 +17,7 @@ import math
 import os
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -195,6 +196,9 @@ def test_nodes_find_the_robots_data_its_clock_and_a_window(tmp_path, monkeypatch
     assert ticks.topics["left_ticks"].count == 60  # 2 s at 30 Hz
     assert (tmp_path / "run" / "data" / "logs" / "ticks.txt").read_text() == "60 ticks\n"
     assert "[/duckiebot/tick_recorder]: recorded 60 ticks" in log
+    # The host's name in node code is the robot's, as in its container; the laptop keeps its own.
+    assert "[/duckiebot/tick_recorder]: recording on duckiebot (uname says duckiebot)" in log
+    assert socket.gethostname() == os.uname()[1] != "duckiebot"
     assert not Path("/data/bags/ticks.bag").exists()
     # time.time() and perf_counter() in the node read the simulated clock: dt is the rate's.
     assert "[/duckiebot/heading_pid]: mean dt 0.100 s over 20 steps, 2.00 s in all" in log

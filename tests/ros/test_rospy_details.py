@@ -211,6 +211,39 @@ def test_each_publishers_messages_carry_its_own_connection_header(graph):
     assert seen == [("left", "/left", "scout", "0"), ("right", "/right", "leader", "1")]
 
 
+def test_a_shutdown_hook_may_sleep_and_call_another_nodes_service(graph):
+    # On a robot's wall clock rospy.sleep in a hook sleeps and returns, and the other nodes
+    # still answer while each ends: a hook that stops the LEDs through a service works.
+    from duckielib.messages import get_service_class
+
+    trigger = get_service_class("std_srvs/Trigger")
+    TriggerResponse = trigger._response_class  # noqa: N806
+    said = []
+
+    def server():
+        rospy.init_node("led_server")
+        rospy.Service("lights_off", trigger, lambda request: TriggerResponse(True, "off"))
+        rospy.spin()
+
+    def driver():
+        rospy.init_node("driver")
+        lights_off = rospy.ServiceProxy("lights_off", trigger)
+
+        def on_shutdown():
+            rospy.sleep(1.0)
+            said.append(lights_off().message)
+
+        rospy.on_shutdown(on_shutdown)
+        rospy.spin()
+
+    graph.launch(server)  # launched first: shut down first
+    graph.launch(driver)
+    graph.run(0.5)
+    graph.shutdown()
+    assert said == ["off"]
+    assert not [r for r in graph.log if r.level >= 40]
+
+
 def test_throttled_identical_logs_say_what_changed_or_what_stayed_a_while(graph):
     def node():
         rospy.init_node("counter")

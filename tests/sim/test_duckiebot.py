@@ -132,6 +132,10 @@ def test_kinematics_parameters_are_the_db21_defaults(bot):
     for name, value in DB21.kinematics_params().items():
         assert rosparam.get(f"/duckiebot/kinematics_node/{name}") == value
     assert rosparam.get("/duckiebot/left_wheel_encoder_node/resolution") == 135
+    # The camera driver's, which students' nodes read (its frame rate, to time their work).
+    assert rosparam.get("/duckiebot/camera_node/framerate") == 30
+    assert rosparam.get("/duckiebot/camera_node/res_w") == 640
+    assert rosparam.get("/duckiebot/camera_node/res_h") == 480
 
 
 def test_encoders_publish_at_30_hz_each_on_their_own_schedules(bot):

@@ -79,6 +79,10 @@ def sleep(duration: Union[float, rostime.Duration]) -> None:
     """
     node = current_node("rospy.sleep()")
     if node.is_shutdown:
+        if node.in_shutdown_hooks:
+            # A hook that waits for its last command to take effect: on a robot's wall clock
+            # rospy sleeps and returns; the graph's clock has stopped, so it returns at once.
+            return
         # As rospy on simulated time (on a robot's wall clock it would sleep and return): it
         # is what ends a loop like ``while True: ...; rospy.sleep(1)`` once the node is over.
         raise ROSInterruptException("ROS shutdown request")

@@ -19,7 +19,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 from duckielib.tools.project.image import ImageEnvironment, image_environment
 from duckielib.tools.project.launch import NodeSpec, launched_nodes
 from duckielib.tools.project.workspace import PathLike, ProjectError, Workspace
-from duckielib.tools.robot_env import node_clocks, robot_data, windows_saved
+from duckielib.tools.robot_env import node_clocks, robot_data, robot_hostname, windows_saved
 
 __all__ = ["ProjectRun", "run_project"]
 
@@ -176,6 +176,7 @@ def _as_on_the_robot(
         robot.enter_context(modules_installed(replace_real=True))
         robot.enter_context(robot_data(folder / "data"))
         robot.enter_context(node_clocks(workspace.root, clock))
+        robot.enter_context(robot_hostname(workspace.root, os.environ["VEHICLE_NAME"]))
         robot.enter_context(windows_saved(folder / "windows", notes, publish))
         yield
 

@@ -3,6 +3,7 @@
 """Records the left encoder's ticks for 2 s to the robot's /data, as students' nodes do."""
 
 import os
+import socket
 
 import rosbag
 import rospy
@@ -12,6 +13,9 @@ BAG_DIR = "/data/bags"
 
 if __name__ == "__main__":
     rospy.init_node("tick_recorder")
+    # On the robot, the container's host name is the robot's name.
+    veh = socket.gethostname()
+    rospy.loginfo("recording on %s (uname says %s)", veh, os.uname()[1])
     if not os.path.exists(BAG_DIR):
         os.makedirs(BAG_DIR)
     bag = rosbag.Bag(os.path.join(BAG_DIR, "ticks.bag"), "w")
