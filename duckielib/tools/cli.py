@@ -284,6 +284,9 @@ def _run(args: argparse.Namespace) -> int:
             print(interrupted.text())
         raise
     print(run.text())
+    if run.failures:
+        print(f"duckie: {run.failures[0]}", file=sys.stderr)
+        return 1
     return 0
 
 

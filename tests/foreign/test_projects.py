@@ -140,39 +140,68 @@ def test_a_project_that_cannot_run_is_said_with_its_file_and_line(tmp_path, monk
     with pytest.raises(ProjectError, match=r"square\.launch, line 8 uses \$\(arg sides\)"):
         launched_nodes(broken)
     launch.write_text(launch.read_text().replace("$(arg sides)", "$(arg side)"))
+    # A node that fails is said with its file and line; the others run on, as in roslaunch
+    # (here the failing node is required, so the run ends with it).
     node = broken / "packages/motion_control/src/square_node.py"
     node.write_text(node.read_text().replace("import Progress", "import Progres"))
-    with pytest.raises(
-        ProjectError,
-        match=r"The node square_driver stopped with ImportError at "
-        r"packages/motion_control/src/square_node\.py, line 7: cannot import name 'Progres'",
-    ):
-        run_project(broken, out=tmp_path / "run")
+    run = run_project(broken, out=tmp_path / "run")
+    (failure,) = run.failures
+    assert failure.startswith(
+        "The node square_driver stopped with ImportError at "
+        "packages/motion_control/src/square_node.py, line 7: cannot import name 'Progres'"
+    )
+    assert run.nodes == {
+        "/duckiebot/side_server": "running, stopped when the run ended",
+        "/duckiebot/square_driver": "failed (its traceback is in log.txt)",
+    }
     assert (tmp_path / "run" / "run.bag").is_file()  # closed whole, wheels stopped
     node.write_text(
         node.read_text().replace("import Progres\n", "import Progress\nimport tag_finder\n")
     )
     (broken / "dependencies-py3.txt").write_text("numpy\ntag-finder>=3.1  # the robot's\n")
-    with pytest.raises(
-        ProjectError,
-        match=r"No module named 'tag_finder'\. The project lists tag-finder>=3\.1 in "
-        r"dependencies-py3\.txt, which dts devel build installs on the robot: install it here "
-        r"too, with '\.venv/bin/pip install tag-finder>=3\.1'\.",
-    ):
-        run_project(broken, out=tmp_path / "run2")
+    (failure,) = run_project(broken, out=tmp_path / "run2").failures
+    assert failure.endswith(
+        "No module named 'tag_finder'. The project lists tag-finder>=3.1 in "
+        "dependencies-py3.txt, which dts devel build installs on the robot: install it here "
+        "too, with '.venv/bin/pip install tag-finder>=3.1'."
+    )
     node.write_text(node.read_text().replace("import tag_finder", "import image_geometry"))
     (broken / "dependencies-apt.txt").write_text("ros-noetic-image-geometry\n")
-    with pytest.raises(
-        ProjectError,
-        match=r"No module named 'image_geometry'\. The project installs it on the robot from "
-        r"dependencies-apt\.txt \(ros-noetic-image-geometry\), a ROS package the virtual "
-        r"Duckiebot does not serve",
-    ):
-        run_project(broken, out=tmp_path / "run3")
+    (failure,) = run_project(broken, out=tmp_path / "run3").failures
+    assert (
+        "No module named 'image_geometry'. The project installs it on the robot from "
+        "dependencies-apt.txt (ros-noetic-image-geometry), a ROS package the virtual "
+        "Duckiebot does not serve" in failure
+    )
     launcher = broken / "launchers/default.sh"
     launcher.write_text(launcher.read_text() + "dt-exec make everything\n")
     with pytest.raises(ProjectError, match=r"default\.sh, line 13 runs 'make'"):
         launched_nodes(broken)
+    launcher.write_text(
+        launcher.read_text().replace(
+            "dt-exec make everything", "dt-exec roslaunch motion_control square.launch file"
+        )
+    )
+    with pytest.raises(
+        ProjectError,
+        match=r"default\.sh, line 13: roslaunch takes its arguments as name:=value after the "
+        r"package and the launch file, and 'file' is none",
+    ):
+        launched_nodes(broken)
+    elsewhere = broken / "packages/motion_control/launch/elsewhere.launch"
+    elsewhere.write_text('<launch>\n  <node pkg="move_robot" type="go.py" name="go"/>\n</launch>\n')
+    with pytest.raises(
+        ProjectError,
+        match=r"elsewhere\.launch starts no node of the project\. .*elsewhere\.launch, line 2: "
+        r"node go\.py of package move_robot is not in this project",
+    ):
+        launched_nodes(elsewhere)
+    basic = tmp_path / "basic"
+    (basic / "packages" / "my_code").mkdir(parents=True)
+    (basic / "launchers").mkdir()
+    (basic / ".dtproject").write_text("TYPE=template-basic\nTYPE_VERSION=2\n")
+    with pytest.raises(ProjectError, match=r"is a Duckietown template-basic project"):
+        launched_nodes(basic)
 
 
 def test_duckie_run_prints_the_nodes_and_what_they_published(tmp_path, capsys, monkeypatch):
@@ -268,16 +297,26 @@ while not rospy.is_shutdown():
 """
 
 
-def test_ctrl_c_stops_a_run_with_its_wheels_at_zero_and_its_files_whole(tmp_path):
-    package = tmp_path / "project" / "packages" / "driver"
-    (package / "src").mkdir(parents=True)
-    (package / "package.xml").write_text(
-        '<?xml version="1.0"?>\n<package format="2"><name>driver</name><version>0.1.0'
-        "</version><description>drives</description><maintainer email='a@b.c'>a</maintainer>"
+def small_project(root, package, scripts, launchers=()):
+    """A project with one catkin package of node scripts, and launchers, written here."""
+    folder = root / "packages" / package
+    (folder / "src").mkdir(parents=True)
+    (folder / "package.xml").write_text(
+        f'<?xml version="1.0"?>\n<package format="2"><name>{package}</name><version>0.1.0'
+        "</version><description>nodes</description><maintainer email='a@b.c'>a</maintainer>"
         "<license>MIT</license><buildtool_depend>catkin</buildtool_depend></package>\n"
     )
+    for name, text in scripts.items():
+        (folder / "src" / name).write_text(text)
+    (root / "launchers").mkdir()
+    for name, text in dict(launchers).items():
+        (root / "launchers" / name).write_text(text)
+    return folder
+
+
+def test_ctrl_c_stops_a_run_with_its_wheels_at_zero_and_its_files_whole(tmp_path):
+    package = small_project(tmp_path / "project", "driver", {"drive_forever.py": DRIVE_FOREVER})
     script = package / "src" / "drive_forever.py"
-    script.write_text(DRIVE_FOREVER)
     out = tmp_path / "run"
     command = [sys.executable, "-m", "duckielib.tools.cli", "run", str(script)]
     process = subprocess.Popen(
@@ -356,8 +395,15 @@ def test_the_courses_own_robot_project_runs_as_its_image_runs_it(tmp_path):
     # solution through the Dockerfile's DUCKIE_SOLUTION, and take the virtual robot's rospy.
     project = tmp_path / "robot_nodes"
     shutil.copytree(ROBOT_PROJECT, project, ignore=shutil.ignore_patterns(*GENERATED))
-    with pytest.raises(ProjectError, match=r"exited with status 1 .* which does not exist yet"):
-        run_project(project, launcher="straight", out=tmp_path / "unprepared")
+    unprepared = run_project(project, launcher="straight", out=tmp_path / "unprepared")
+    assert unprepared.failures[0] == (
+        "The node odometry_node exited with status 1 at "
+        "packages/course_nodes/src/odometry_node.py, line 17 (it said why above)."
+    )
+    assert unprepared.notes[-1] == (
+        "the Dockerfile sets DUCKIE_SOLUTION=/code/course/solution.py, the project's "
+        "deploy/solution.py in the image, which does not exist yet."
+    )
     prepare(project=project, quiet=True)
     run = run_project(project, launcher="straight", seconds=60, out=tmp_path / "run")
     assert run.nodes["/duckiebot/mission_node"] == "ended (required: the run ended with it)"
@@ -370,3 +416,83 @@ def test_the_courses_own_robot_project_runs_as_its_image_runs_it(tmp_path):
     farthest = max(math.hypot(x - truth.x[0], y - truth.y[0]) for x, y in zip(truth.x, truth.y))
     assert farthest == pytest.approx(1.25, abs=0.05)  # the task: 1.25 m out, then back
     assert "DUCKIE_SOLUTION" not in os.environ
+
+
+CHORES = {
+    "count_up.py": """\
+import os
+import sys
+import rospy
+from std_msgs.msg import Int32
+
+rospy.init_node("count_up")
+rospy.loginfo("side %s, %s", sys.argv[1], os.environ["GREETING"])
+pub = rospy.Publisher("count", Int32, queue_size=10)
+rate = rospy.Rate(10)
+for n in range(30):
+    pub.publish(n)
+    rate.sleep()
+""",
+    "cable_check.py": """\
+import rospy
+
+rospy.init_node("cable_check")
+rospy.sleep(1.0)
+raise RuntimeError("the left cable is loose")
+""",
+    "after_check.py": """\
+import rospy
+
+rospy.init_node("after_check")
+rospy.loginfo("started at %.1f s", rospy.get_time())
+with open("after_check.txt", "w") as out:  # relative: the container's working folder
+    out.write("checked")
+""",
+}
+
+CHORES_LAUNCHER = """\
+#!/bin/bash
+source /environment.sh
+dt-launchfile-init
+SIDE=${SQUARE_SIDE:-0.5}
+export GREETING="hello from ${VEHICLE_NAME}"
+dt-exec rosrun chores count_up.py $SIDE
+rosrun chores cable_check.py
+rosrun chores after_check.py
+dt-launchfile-join
+"""
+
+
+def test_launcher_lines_run_as_bash_runs_them_and_a_failed_node_leaves_the_others(
+    tmp_path, capsys, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    # ${VAR:-default}, a variable of the launcher and one it exports; dt-exec runs in the
+    # background, a plain line in the foreground: the next line waits for it. A node that
+    # fails is said with its file and line, and the others run on, as under roslaunch.
+    project = tmp_path / "chores"
+    small_project(project, "chores", CHORES, {"default.sh": CHORES_LAUNCHER})
+    run = run_project(project, out=tmp_path / "run", seconds=10)
+    assert run.failures == [
+        "The node cable_check stopped with RuntimeError at "
+        "packages/chores/src/cable_check.py, line 5: the left cable is loose."
+    ]
+    assert run.nodes == {
+        "/count_up": "ended",
+        "/cable_check": "failed (its traceback is in log.txt)",
+        "/after_check": "ended",
+    }
+    assert run.topics["/count"] == 30
+    assert run.simulated == pytest.approx(3.0)  # 30 messages at 10 Hz, the last sleep included
+    log = (tmp_path / "run" / "log.txt").read_text()
+    assert "[/count_up]: side 0.5, hello from duckiebot" in log
+    assert "[/after_check]: started at 1.0 s" in log
+    assert (tmp_path / "run" / "after_check.txt").read_text() == "checked"
+    assert not Path("after_check.txt").exists()
+    assert "GREETING" not in os.environ
+    assert "SIDE" not in os.environ
+    # The command prints the run, then the failure, and exits with 1.
+    assert main(["run", str(project), "--out", str(tmp_path / "run2")]) == 1
+    out, err = capsys.readouterr()
+    assert "failed: The node cable_check stopped with RuntimeError" in out
+    assert err.strip() == f"duckie: {run.failures[0]}"

@@ -22,11 +22,9 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Dict, Iterator, List, Optional, Tuple
 
+from duckielib.tools.project.shell import Unresolved, expand
+
 __all__ = ["ImageEnvironment", "image_environment"]
-
-
-class _Unresolved(Exception):
-    """A value that names a variable the Dockerfile does not set (the base image's own)."""
 
 
 @dataclass
@@ -76,43 +74,6 @@ def _instructions(text: str) -> Iterator[Tuple[str, str]]:
         logical = ""
 
 
-def _expand(value: str, known: Dict[str, str]) -> str:
-    """``value`` with the Dockerfile's variables replaced, as the builder replaces them.
-
-    Raises:
-        _Unresolved: if it names a variable the Dockerfile does not set.
-    """
-    out: List[str] = []
-    index = 0
-    while index < len(value):
-        if value.startswith("${", index):
-            depth, end = 1, index + 2
-            while end < len(value) and depth:
-                depth += {"{": 1, "}": -1}.get(value[end], 0)
-                end += 1
-            out.append(_reference(value[index + 2 : end - 1], known))
-            index = end
-        elif value[index] == "$" and (match := re.match(r"\w+", value[index + 1 :])):
-            out.append(_reference(match[0], known))
-            index += 1 + len(match[0])
-        else:
-            out.append(value[index])
-            index += 1
-    return "".join(out)
-
-
-def _reference(inner: str, known: Dict[str, str]) -> str:
-    """What ``${inner}`` stands for: ``NAME``, ``NAME:+word`` or ``NAME:-word``."""
-    name, operator, word = re.match(r"(\w*)(?::([+-]))?(.*)", inner, re.S).groups()  # type: ignore[union-attr]
-    if operator == "+":
-        return _expand(word, known) if known.get(name) else ""
-    if operator == "-":
-        return known[name] if known.get(name) else _expand(word, known)
-    if name not in known or word:
-        raise _Unresolved(name)
-    return known[name]
-
-
 def _pairs(arguments: str) -> List[Tuple[str, str]]:
     """``NAME=value`` pairs of an ``ENV`` or ``ARG`` line (``ENV NAME value`` too)."""
     try:
@@ -130,8 +91,8 @@ def _copied(arguments: str, known: Dict[str, str], root: Path) -> Optional[Tuple
         words = [word for word in shlex.split(arguments) if not word.startswith("--")]
         if len(words) != 2:
             return None
-        source, target = words[0], _expand(words[1], known)
-    except (ValueError, _Unresolved):
+        source, target = words[0], expand(words[1], known)
+    except (ValueError, Unresolved):
         return None
     source = re.sub(r"/\.?$", "", source).removeprefix("./") or "."
     if not target.startswith("/") or "$" in source or "*" in source:
@@ -168,8 +129,8 @@ def image_environment(root: Path) -> ImageEnvironment:
             for name, default in _pairs(arguments):
                 if name in known:
                     continue
-                with contextlib.suppress(_Unresolved):  # else the base image's: unknown here
-                    known[name] = _expand(default, known)
+                with contextlib.suppress(Unresolved):  # else the base image's: unknown here
+                    known[name] = expand(default, known)
         elif keyword in ("COPY", "ADD"):
             copy = _copied(arguments, known, root)
             if copy is not None:
@@ -177,8 +138,8 @@ def image_environment(root: Path) -> ImageEnvironment:
         elif keyword == "ENV":
             for name, raw in _pairs(arguments):
                 try:
-                    value = _expand(raw, known)
-                except _Unresolved:
+                    value = expand(raw, known)
+                except Unresolved:
                     known.pop(name, None)
                     continue
                 known[name] = value

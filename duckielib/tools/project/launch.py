@@ -15,6 +15,7 @@ from typing import Any, Dict, List, Optional, Tuple
 
 import yaml
 
+from duckielib.tools.project.shell import expand
 from duckielib.tools.project.workspace import PathLike, ProjectError, Workspace
 
 __all__ = ["Launched", "NodeSpec", "launched_nodes"]
@@ -49,6 +50,9 @@ class NodeSpec:
         remap: its remappings, ``{"from": "to"}``.
         required: whether the run ends when it ends (roslaunch's ``required``).
         where: the launch file and line (or launcher line) that starts it.
+        stage: when it starts: 0 at once; 1 once the launcher's first command that runs in
+            the foreground (no ``dt-exec``, no ``&``) has ended, and so on, as bash runs them.
+        foreground: whether its launcher line runs in the foreground (bash waits for it).
     """
 
     name: Optional[str]
@@ -60,6 +64,8 @@ class NodeSpec:
     remap: Dict[str, str] = field(default_factory=dict)
     required: bool = False
     where: str = ""
+    stage: int = 0
+    foreground: bool = False
 
     @property
     def label(self) -> str:
@@ -70,11 +76,15 @@ class NodeSpec:
 
 @dataclass
 class Launched:
-    """What a launcher starts: its nodes, the global parameters, and notes on what was left."""
+    """What a launcher starts: its nodes, the global parameters, and notes on what was left.
+
+    ``environment`` holds what the launcher exports for the nodes (``export NAME=value``).
+    """
 
     nodes: List[NodeSpec] = field(default_factory=list)
     params: Dict[str, Any] = field(default_factory=dict)
     notes: List[str] = field(default_factory=list)
+    environment: Dict[str, str] = field(default_factory=dict)
 
 
 @dataclass
@@ -129,6 +139,8 @@ class _Scope:
     args: Dict[str, str]
     namespace: str
     remap: Dict[str, str]
+    #: The environment roslaunch runs in: the laptop's, with what the launcher exports.
+    env: Dict[str, str] = field(default_factory=lambda: dict(os.environ))
 
     def where(self, element: _Element) -> str:
         return f"{self.file}, line {element.line}"
@@ -170,7 +182,7 @@ def _evaluate(expression: str, scope: _Scope, element: _Element, workspace: Work
         "arg": arg,
         "find": lambda package: str(workspace.find(package)),
         "env": lambda name: _substitute(f"$(env {name})", scope, element, workspace),
-        "optenv": lambda name, default="": os.environ.get(name, default),
+        "optenv": lambda name, default="": scope.env.get(name, default),
         "dirname": lambda: str(scope.file.parent),
         "anon": lambda name: f"{name}_{os.getpid()}",
         "true": True,
@@ -208,14 +220,14 @@ def _substitute(text: str, scope: _Scope, element: _Element, workspace: Workspac
                 )
             return scope.args[words[0]]
         if command == "env" and len(words) == 1:
-            if words[0] not in os.environ:
+            if words[0] not in scope.env:
                 raise ProjectError(
                     f"{scope.where(element)} uses $(env {words[0]}), which is not set; set it, "
                     f"or use $(optenv {words[0]} default)."
                 )
-            return os.environ[words[0]]
+            return scope.env[words[0]]
         if command == "optenv" and words:
-            return os.environ.get(words[0], " ".join(words[1:]))
+            return scope.env.get(words[0], " ".join(words[1:]))
         if command == "dirname" and not words:
             return str(scope.file.parent)
         if command == "anon" and len(words) == 1:
@@ -277,6 +289,12 @@ class _LaunchReader:
     def __init__(self, workspace: Workspace) -> None:
         self.workspace = workspace
         self.launched = Launched()
+        #: The launcher's variables (the laptop's environment, then what its lines set).
+        self.variables: Dict[str, str] = dict(os.environ)
+        #: The environment of what the launcher starts: the laptop's and what it exports.
+        self.environment: Dict[str, str] = dict(os.environ)
+        for names in (self.variables, self.environment):
+            names.setdefault("VEHICLE_NAME", "duckiebot")  # as Duckietown's environment sets it
 
     def read(self, path: Path, args: Dict[str, str], namespace: str = "/") -> None:
         """Read a launch file given ``roslaunch``'s ``name:=value`` arguments.
@@ -285,7 +303,7 @@ class _LaunchReader:
         even where the file does not declare them.
         """
         root = _parse_xml(path)
-        scope = _Scope(path, dict(args), namespace, {})
+        scope = _Scope(path, dict(args), namespace, {}, self.environment)
         self._children(root, scope, given=args)
 
     def _attr(self, element: _Element, scope: _Scope, name: str, default: Any = None) -> Any:
@@ -335,7 +353,7 @@ class _LaunchReader:
         namespace = scope.namespace
         if "ns" in element.attrs:
             namespace = _joined(scope.namespace, self._attr(element, scope, "ns"))
-        inner = _Scope(scope.file, scope.args, namespace, dict(scope.remap))
+        inner = _Scope(scope.file, scope.args, namespace, dict(scope.remap), scope.env)
         self._children(element, inner, given={})
 
     def _remap(self, element: _Element, scope: _Scope) -> None:
@@ -426,7 +444,7 @@ class _LaunchReader:
             required=_truthy(self._attr(element, scope, "required", "false"), where),
             where=where,
         )
-        inner = _Scope(scope.file, scope.args, namespace, spec.remap)
+        inner = _Scope(scope.file, scope.args, namespace, spec.remap, scope.env)
         for child in element.children:
             if not self._included(child, inner):
                 continue
@@ -452,7 +470,7 @@ class _LaunchReader:
             if child.tag == "arg" and self._included(child, scope):
                 given[self._needed(child, scope, "name")] = self._needed(child, scope, "value")
         root = _parse_xml(path)
-        inner = _Scope(path, {}, namespace, dict(scope.remap))
+        inner = _Scope(path, {}, namespace, dict(scope.remap), scope.env)
         self._children(root, inner, given=given)
 
 
@@ -469,9 +487,23 @@ def _launch_file(workspace: Workspace, words: List[str], where: str) -> Tuple[Pa
     raise ProjectError(f"{where}: roslaunch needs a package and a launch file.")
 
 
-def _assignments(words: List[str]) -> Dict[str, str]:
-    """The ``name:=value`` words of a command line, by name."""
-    return {name: value for name, sep, value in (word.partition(":=") for word in words) if sep}
+def _assignments(words: List[str], where: str) -> Dict[str, str]:
+    """The ``name:=value`` words of a roslaunch command line, by name.
+
+    Raises:
+        ProjectError: for a word that is none, as roslaunch stops at it.
+    """
+    found: Dict[str, str] = {}
+    for word in words:
+        name, sep, value = word.partition(":=")
+        if not sep:
+            raise ProjectError(
+                f"{where}: roslaunch takes its arguments as name:=value after the package and "
+                f"the launch file, and {word!r} is none (roslaunch would look for a file of "
+                "that name and stop)."
+            )
+        found[name] = value
+    return found
 
 
 def launched_nodes(path: PathLike, launcher: str = "default") -> Tuple[Workspace, Launched]:
@@ -497,7 +529,8 @@ def launched_nodes(path: PathLike, launcher: str = "default") -> Tuple[Workspace
     else:
         _read_launcher(workspace, reader, launcher)
     if not reader.launched.nodes:
-        raise ProjectError(f"{path} starts no node of the project.")
+        left = "".join(f" {note[0].upper()}{note[1:]}" for note in reader.launched.notes)
+        raise ProjectError(f"{path} starts no node of the project.{left}")
     return workspace, reader.launched
 
 
@@ -518,31 +551,45 @@ def _read_launcher(workspace: Workspace, reader: _LaunchReader, launcher: str) -
             f"The project {workspace.root} has no launcher {launcher!r}"
             + (f"; its launchers are: {', '.join(there)}." if there else " (no launchers/).")
         )
+    stage = 0
     for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
         where = f"{path}, line {number}"
-        words = _launcher_words(line, where)
+        words, background = _launcher_words(line, where, reader.variables)
         if not words or words[0] in _SET_UP + _SHELL or words[0].startswith("#!"):
             continue
         if words[0] == "export" or re.fullmatch(r"\w+=.*", words[0]):
             for word in words[1:] if words[0] == "export" else words:
                 name, _, value = word.partition("=")
-                os.environ[name] = value
+                reader.variables[name] = value
+                if words[0] == "export" or name in reader.environment:
+                    reader.environment[name] = reader.launched.environment[name] = value
             continue
+        before = len(reader.launched.nodes)
         _launcher_line(workspace, reader, words, where)
+        started = reader.launched.nodes[before:]
+        for spec in started:
+            spec.stage, spec.foreground = stage, not background
+        if started and not background:
+            stage += 1  # bash runs the next line once this one has ended
 
 
-def _launcher_words(line: str, where: str) -> List[str]:
-    """A launcher line's words, its variables expanded, without ``dt-exec`` or a final ``&``."""
+def _launcher_words(line: str, where: str, variables: Dict[str, str]) -> Tuple[List[str], bool]:
+    """A launcher line's words, variables expanded, without ``dt-exec`` or a final ``&``.
+
+    Also whether the line runs in the background (``dt-exec`` or ``&``), as bash reads it.
+    """
     try:
         words = shlex.split(line, comments=True)
     except ValueError as error:
         raise ProjectError(f"{where}: {error}.") from None
-    words = [os.path.expandvars(word) if "$" in word else word for word in words]
-    if words and words[0] == "dt-exec":
+    words = [expand(word, variables, missing="") if "$" in word else word for word in words]
+    background = bool(words) and words[0] == "dt-exec"
+    if background:
         words = words[1:]
     while words and words[-1] in ("&", ";"):
+        background = background or words[-1] == "&"
         words = words[:-1]
-    return words
+    return words, background
 
 
 def _launcher_line(
@@ -553,7 +600,7 @@ def _launcher_line(
     if command == "roslaunch":
         rest = [word for word in rest if not word.startswith("--")]
         launch, rest = _launch_file(workspace, rest, where)
-        reader.read(launch.resolve(), _assignments(rest))
+        reader.read(launch.resolve(), _assignments(rest, where))
     elif command == "rosrun" and len(rest) >= 2:
         script = workspace.executable(rest[0], rest[1])
         reader.launched.nodes.append(_script_node(workspace, script, rest[2:], where))

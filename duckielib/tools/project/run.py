@@ -12,13 +12,13 @@ import re
 import sys
 import time
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 
 from duckielib.tools.project.image import ImageEnvironment, image_environment
 from duckielib.tools.project.launch import NodeSpec, launched_nodes
-from duckielib.tools.project.workspace import PathLike, ProjectError, Workspace
+from duckielib.tools.project.workspace import PathLike, Workspace
 from duckielib.tools.robot_env import node_clocks, robot_data, robot_hostname, windows_saved
 
 __all__ = ["ProjectRun", "run_project"]
@@ -49,6 +49,8 @@ class ProjectRun:
         wall: wall-clock seconds.
         wheels: the wheels' duty cycles (left, right) once the run had stopped the robot.
         interrupted: whether Ctrl-C (or SIGTERM) ended the run.
+        failures: each node that failed, in a sentence with the project's file and line, in
+            the order they failed (the others ran on, as roslaunch lets them).
     """
 
     folder: Path
@@ -59,6 +61,7 @@ class ProjectRun:
     wall: float
     wheels: Tuple[float, float] = (0.0, 0.0)
     interrupted: bool = False
+    failures: List[str] = field(default_factory=list)
 
     @property
     def files(self) -> Dict[str, Path]:
@@ -71,6 +74,7 @@ class ProjectRun:
         lines = [f"ran {len(self.nodes)} node(s) for {self.simulated:.1f} s (simulated){ended}:"]
         width = max(len(name) for name in self.nodes)
         lines += [f"  {name:<{width}}  {how}" for name, how in self.nodes.items()]
+        lines += [f"failed: {failure}" for failure in self.failures]
         lines.append("recorded:")
         width = max((len(topic) for topic in self.topics), default=0)
         lines += [f"  {topic:<{width}}  {count}" for topic, count in self.topics.items()]
@@ -96,6 +100,7 @@ class ProjectRun:
             "wall_s": round(self.wall, 3),
             "wheels_at_end": list(self.wheels),
             "interrupted": self.interrupted,
+            "failures": self.failures,
         }
 
 
@@ -130,11 +135,22 @@ def _how_it_ended(
     return "running, stopped when the run ended"
 
 
-def _window_publisher(graph: Any, recorders: List[Any]) -> Callable[[str, bytes], None]:
-    """``publish(topic, jpeg)`` for ``cv2`` windows: a node ``cv2_windows`` publishes the frames.
+def _recording_new_topics(recorder: Any) -> Callable[[Any, bool], None]:
+    """A graph's topic watcher that has ``recorder`` record a new topic from its first message.
 
-    Each window's topic is recorded by ``recorders`` from its first frame.
+    ``rosbag record -a`` finds new topics by asking the master now and then, and misses
+    their first messages; a run's bag has every message a node published.
     """
+
+    def watch(handle: Any, publishes: bool) -> None:
+        if publishes and not re.fullmatch(_NOT_RECORDED, handle.name):
+            recorder.add(handle.name)
+
+    return watch
+
+
+def _window_publisher(graph: Any) -> Callable[[str, bytes], None]:
+    """``publish(topic, jpeg)`` for ``cv2`` windows: a node ``cv2_windows`` publishes the frames."""
     from duckielib.messages import CompressedImage
     from duckielib.ros import rospy
     from duckielib.ros.context import node_context
@@ -146,8 +162,6 @@ def _window_publisher(graph: Any, recorders: List[Any]) -> Callable[[str, bytes]
             node = graph.nodes.get("/cv2_windows") or graph.host_node("cv2_windows")
             with node_context(node):
                 publishers[topic] = rospy.Publisher(topic, CompressedImage, queue_size=1)
-            for recorder in recorders:
-                recorder.add(topic)
         message: Any = CompressedImage(format="jpeg", data=jpeg)
         message.header.stamp = rospy.Time.from_sec(graph.time)
         publishers[topic].publish(message)
@@ -156,28 +170,46 @@ def _window_publisher(graph: Any, recorders: List[Any]) -> Callable[[str, bytes]
 
 
 @contextlib.contextmanager
+def _exported(variables: Dict[str, str]) -> Iterator[None]:
+    """Set what the launcher exports for its nodes, then put the environment back."""
+    before = {name: os.environ.get(name) for name in variables}
+    os.environ.update(variables)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
+
+
+@contextlib.contextmanager
 def _as_on_the_robot(
     workspace: Workspace,
     image: ImageEnvironment,
+    exported: Dict[str, str],
     folder: Path,
     graph: Any,
     notes: List[str],
-    recorders: List[Any],
 ) -> Iterator[None]:
     """What node code finds as on the robot: packages, image, rospy, /data, clocks, windows."""
     from duckielib.ros.modules import modules_installed
 
     clock: Callable[[], float] = lambda: graph.time  # noqa: E731
-    publish = _window_publisher(graph, recorders)
+    publish = _window_publisher(graph)
 
     with contextlib.ExitStack() as robot:
         robot.enter_context(workspace.importable())
         robot.enter_context(image.applied())
+        robot.enter_context(_exported(exported))
         robot.enter_context(modules_installed(replace_real=True))
         robot.enter_context(robot_data(folder / "data"))
         robot.enter_context(node_clocks(workspace.root, clock))
         robot.enter_context(robot_hostname(workspace.root, os.environ["VEHICLE_NAME"]))
         robot.enter_context(windows_saved(folder / "windows", notes, publish))
+        # A node's relative paths land in the run's folder, as in the robot's container.
+        robot.enter_context(contextlib.chdir(folder))
         yield
 
 
@@ -197,13 +229,17 @@ def run_project(
     ends after ``seconds`` of simulated time, or when a ``required`` node ends, or when every
     node has ended; the wheels are stopped in every case.
 
+    A node that fails (raises, or exits with a status other than 0) is said in the run's
+    ``failures``, with the project's file and line, and the others run on, as roslaunch lets
+    them; a ``required`` node's failure ends the run.
+
     Raises:
         ProjectError: for a project, launcher or launch file that cannot be run (the file and
-            line said), or a node that fails when it starts.
+            line said).
+        KeyboardInterrupt: Ctrl-C, once the run's files are written (the run is its ``run``).
     """
     from duckielib.bags import BagRecorder
-    from duckielib.ros import Graph, node_script
-    from duckielib.ros.graph import NodeCrashed
+    from duckielib.ros import Graph
     from duckielib.sim import VirtualDuckiebot
     from duckielib.sim.world import OPEN_MAT
 
@@ -211,7 +247,7 @@ def run_project(
     workspace, launched = launched_nodes(path, launcher)
     folder = Path(out)
     folder.mkdir(parents=True, exist_ok=True)
-    files = _run_files(folder)
+    files = _run_files(folder.resolve())  # the run works in its folder (see _as_on_the_robot)
     for each in files.values():
         each.unlink(missing_ok=True)
     graph = Graph(echo_logs=False)
@@ -223,31 +259,16 @@ def run_project(
     path_before = list(sys.path)  # node scripts put their folders first, as on the robot
     image = image_environment(workspace.root)
     notes = [*launched.notes, *image.notes]
-    recorders: List[BagRecorder] = []
-    with _as_on_the_robot(workspace, image, folder, graph, notes, recorders):
-        for spec in launched.nodes:
-            bot.launch(
-                _node_main(spec, node_script(spec.script, *spec.args), ended),
-                name=spec.name,
-                namespace=spec.namespace,
-                remap=spec.remap or None,
-                params=spec.params or None,
-            )
+    with _as_on_the_robot(workspace, image, launched.environment, folder.resolve(), graph, notes):
+        stages = _Stages(bot, launched.nodes, ended)
         recorder = BagRecorder(files["bag"], graph=graph, exclude=_NOT_RECORDED)
-        recorders.append(recorder)
-        required = [spec.label for spec in launched.nodes if spec.required]
-
-        def over() -> bool:
-            if any(label in ended for label in required):
-                return True
-            return len(ended) == len(launched.nodes)
-
-        crash: Optional[BaseException] = None
+        graph.topic_watchers.append(_recording_new_topics(recorder))
+        failures: List[str] = []
         interrupt: Optional[KeyboardInterrupt] = None
         try:
-            bot.run_until(over, seconds)
-        except NodeCrashed as error:
-            crash = error
+            _drive(
+                bot, stages, seconds, lambda error: failures.append(_crash_said(error, workspace))
+            )
         except KeyboardInterrupt as error:  # Ctrl-C: stop as at the end, then say so
             interrupt = error
         finally:
@@ -272,28 +293,85 @@ def run_project(
         wall=time.perf_counter() - wall,
         wheels=bot.sim.wheel_duties,
         interrupted=interrupt is not None,
+        failures=failures,
     )
     files["summary"].write_text(json.dumps(run.summary(), indent=2) + "\n")
-    _raise_how_it_stopped(run, interrupt, crash, workspace, image)
+    if interrupt is not None:
+        interrupt.run = run  # type: ignore[attr-defined]  # what ran, for the command to print
+        raise interrupt
     return run
 
 
-def _raise_how_it_stopped(
-    run: ProjectRun,
-    interrupt: Optional[KeyboardInterrupt],
-    crash: Optional[BaseException],
-    workspace: Workspace,
-    image: ImageEnvironment,
-) -> None:
-    """Raise Ctrl-C again (with the run, for the command to print) or a node's crash."""
-    if interrupt is not None:
-        interrupt.run = run  # type: ignore[attr-defined]
-        raise interrupt
-    if crash is not None:
-        also = "".join(f" Note: {note[0].upper()}{note[1:]}" for note in image.notes)
-        raise ProjectError(
-            f"{_crash_said(crash, workspace)} The run's bag and log are in {run.folder}.{also}"
+class _Stages:
+    """A launcher's nodes, started as bash runs its lines.
+
+    The nodes of ``dt-exec`` and ``&`` lines start at once; a line that runs in the
+    foreground holds back the lines after it until its nodes have ended (stage by stage, see
+    :attr:`NodeSpec.stage`).
+    """
+
+    def __init__(self, bot: Any, specs: List[NodeSpec], ended: Dict[str, str]) -> None:
+        self.bot = bot
+        self.specs = specs
+        self.ended = ended
+        self.later = sorted((spec for spec in specs if spec.stage > 0), key=lambda s: s.stage)
+        self.required = [spec.label for spec in specs if spec.required]
+        self._start([spec for spec in specs if spec.stage == 0])
+
+    def _start(self, specs: List[NodeSpec]) -> None:
+        from duckielib.ros import node_script
+
+        for spec in specs:
+            self.bot.launch(
+                _node_main(spec, node_script(spec.script, *spec.args), self.ended),
+                name=spec.name,
+                namespace=spec.namespace,
+                remap=spec.remap or None,
+                params=spec.params or None,
+            )
+
+    def over(self) -> bool:
+        """Whether the run is over: a required node ended, or every node has."""
+        if any(label in self.ended for label in self.required):
+            return True
+        return not self.later and len(self.ended) == len(self.specs)
+
+    def next_ready(self) -> bool:
+        """Whether the foreground line before the next stage has ended."""
+        if not self.later:
+            return False
+        waited = self.later[0].stage - 1
+        return all(
+            spec.label in self.ended
+            for spec in self.specs
+            if spec.stage == waited and spec.foreground
         )
+
+    def start_next(self) -> None:
+        """Start the next stage's nodes."""
+        stage = self.later[0].stage
+        starting = [spec for spec in self.later if spec.stage == stage]
+        self.later = self.later[len(starting) :]
+        self._start(starting)
+
+
+def _drive(bot: Any, stages: _Stages, seconds: float, failed: Callable[[Exception], None]) -> None:
+    """Run until the run is over or ``seconds``; each node's failure goes to ``failed``.
+
+    As roslaunch: a node that fails is said, and the others run on (a required node's
+    failure ends the run, as its end does).
+    """
+    from duckielib.ros.graph import NodeCrashed
+
+    while bot.time < seconds:
+        try:
+            bot.run_until(lambda: stages.over() or stages.next_ready(), seconds - bot.time)
+        except NodeCrashed as error:
+            failed(error)
+            continue
+        if stages.over() or not stages.next_ready():
+            return
+        stages.start_next()
 
 
 def _crash_said(crash: BaseException, workspace: Workspace) -> str:

@@ -67,6 +67,14 @@ class Workspace:
                 self.packages[name] = Package(name, folder, _python_folders(folder))
         self.packages = dict(sorted(self.packages.items()))
         if not self.packages:
+            described = self.root / ".dtproject"
+            kind = described.read_text(errors="replace") if described.is_file() else ""
+            if "template-basic" in kind:
+                raise ProjectError(
+                    f"{self.root} is a Duckietown template-basic project: plain Python, with no "
+                    "ROS nodes (no catkin package with a package.xml), so there is nothing for "
+                    "duckie run to start on the virtual Duckiebot; run its code with python3."
+                )
             raise ProjectError(
                 f"{self.root} holds no catkin package (a folder with a package.xml): give the "
                 "project's folder, the one with packages/ and launchers/ in it."
