@@ -248,6 +248,9 @@ class Node:
         self.services: List[ServiceRecord] = []
         self.timers: List[Any] = []
         self.shutdown_hooks: List[Callable[[], Any]] = []
+        #: What the node's code waits for now (``"service /name"``, ``"a message on /t"``) and
+        #: since when (simulated seconds), or None.
+        self.waiting_for: Optional[Tuple[str, float]] = None
         #: Whether the node's shutdown hooks are running now, and whether it has closed.
         self.in_shutdown_hooks = False
         self.closed = False

@@ -272,7 +272,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         run = run_project(
             args.path,
-            launcher=args.launcher,
+            launcher=args.launcher or "default",
             noise=args.noise,
             seed=args.seed,
             seconds=args.seconds,
@@ -303,8 +303,9 @@ def _add_run(commands: argparse._SubParsersAction) -> None:
     run.add_argument(
         "-L",
         "--launcher",
-        default="default",
-        help="the launcher to run, launchers/NAME.sh (default: default)",
+        action="append",
+        help="the launcher to run, launchers/NAME.sh (default: default); give -L again to run "
+        "several together, as several dts devel run containers on one robot",
     )
     _add_robot_options(run)
     run.add_argument(

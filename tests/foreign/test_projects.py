@@ -496,3 +496,46 @@ def test_launcher_lines_run_as_bash_runs_them_and_a_failed_node_leaves_the_other
     out, err = capsys.readouterr()
     assert "failed: The node cable_check stopped with RuntimeError" in out
     assert err.strip() == f"duckie: {run.failures[0]}"
+
+
+HELPERS = {
+    "ask.py": """\
+import rospy
+from std_srvs.srv import Trigger
+
+rospy.init_node("ask")
+rospy.wait_for_service("/answer")
+rospy.loginfo("answer: %s", rospy.ServiceProxy("/answer", Trigger)().message)
+""",
+    "answer.py": """\
+import rospy
+from std_srvs.srv import Trigger, TriggerResponse
+
+rospy.init_node("answer")
+rospy.Service("/answer", Trigger, lambda request: TriggerResponse(True, "forty-two"))
+rospy.spin()
+""",
+}
+
+
+def test_two_launchers_run_together_and_a_node_left_waiting_says_for_what(tmp_path):
+    # On a robot, two `dts devel run -L ...` containers share the robot: one node waits for
+    # a service the other launcher's node offers.
+    project = tmp_path / "helpers"
+    small_project(
+        project,
+        "helpers",
+        HELPERS,
+        {
+            "asker.sh": "#!/bin/bash\ndt-exec rosrun helpers ask.py\n",
+            "answerer.sh": "#!/bin/bash\ndt-exec rosrun helpers answer.py\n",
+        },
+    )
+    alone = run_project(project, launcher="asker", out=tmp_path / "alone", seconds=5)
+    assert alone.nodes == {"/ask": "still waiting for service /answer since 0.0 s, stopped"}
+    both = run_project(project, launcher=["answerer", "asker"], out=tmp_path / "both", seconds=5)
+    assert both.nodes == {
+        "/answer": "still running after 5 s, stopped",
+        "/ask": "ended",
+    }
+    assert "[/ask]: answer: forty-two" in (tmp_path / "both" / "log.txt").read_text()

@@ -269,7 +269,12 @@ def wait_for_service(service: str, timeout: Optional[float] = None) -> None:
     name = node.resolve(service)
     graph = node.graph
     deadline = None if timeout is None else graph.now_ns + _to_ns(timeout)
-    if graph.block(deadline, lambda: name in graph.services or node.is_shutdown):
+    node.waiting_for = (f"service {name}", graph.time)
+    try:
+        offered = graph.block(deadline, lambda: name in graph.services or node.is_shutdown)
+    finally:
+        node.waiting_for = None
+    if offered:
         if node.is_shutdown and name not in graph.services:
             raise ROSInterruptException("rospy shutdown")
         return

@@ -414,10 +414,12 @@ def wait_for_message(topic: str, topic_type: Type[Message], timeout: Optional[fl
     node = current_node("rospy.wait_for_message()")
     received: List[Any] = []
     subscriber = Subscriber(topic, topic_type, received.append, queue_size=1)
+    node.waiting_for = (f"a message on {subscriber.name}", node.graph.time)
     try:
         deadline = None if timeout is None else node.graph.now_ns + _to_ns(timeout)
         _block(node, deadline, lambda: bool(received) or node.is_shutdown)
     finally:
+        node.waiting_for = None
         subscriber.unregister()
     if not received:
         raise ROSException(f"timeout exceeded while waiting for a message on {subscriber.name}")

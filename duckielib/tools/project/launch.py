@@ -11,7 +11,7 @@ import shlex
 import xml.parsers.expat
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import yaml
 
@@ -53,6 +53,7 @@ class NodeSpec:
         stage: when it starts: 0 at once; 1 once the launcher's first command that runs in
             the foreground (no ``dt-exec``, no ``&``) has ended, and so on, as bash runs them.
         foreground: whether its launcher line runs in the foreground (bash waits for it).
+        launcher: the launcher that starts it ("" for a launch file or script run alone).
     """
 
     name: Optional[str]
@@ -66,6 +67,7 @@ class NodeSpec:
     where: str = ""
     stage: int = 0
     foreground: bool = False
+    launcher: str = ""
 
     @property
     def label(self) -> str:
@@ -286,9 +288,9 @@ def _joined(namespace: str, name: str) -> str:
 class _LaunchReader:
     """Reads launch files into a :class:`Launched`."""
 
-    def __init__(self, workspace: Workspace) -> None:
+    def __init__(self, workspace: Workspace, launched: Optional[Launched] = None) -> None:
         self.workspace = workspace
-        self.launched = Launched()
+        self.launched = Launched() if launched is None else launched
         #: The launcher's variables (the laptop's environment, then what its lines set).
         self.variables: Dict[str, str] = dict(os.environ)
         #: The environment of what the launcher starts: the laptop's and what it exports.
@@ -506,13 +508,17 @@ def _assignments(words: List[str], where: str) -> Dict[str, str]:
     return found
 
 
-def launched_nodes(path: PathLike, launcher: str = "default") -> Tuple[Workspace, Launched]:
+def launched_nodes(
+    path: PathLike, launcher: Union[str, Sequence[str]] = "default"
+) -> Tuple[Workspace, Launched]:
     """What ``duckie run PATH`` would start: the project's workspace and its nodes.
 
     Args:
         path: a project folder (its ``launchers/<launcher>.sh`` is read), a launch file or a
             node script inside a project.
-        launcher: the launcher's name, without ``.sh``.
+        launcher: the launcher's name, without ``.sh``; or several, run together as
+            ``dts devel run`` runs each in a container of its own (each with its own
+            variables, its nodes on the one robot).
 
     Raises:
         ProjectError: with the file and line, for what cannot be run.
@@ -521,17 +527,19 @@ def launched_nodes(path: PathLike, launcher: str = "default") -> Tuple[Workspace
     if not target.exists():
         raise ProjectError(f"There is no file or folder {target}.")
     workspace = Workspace.around(target)
-    reader = _LaunchReader(workspace)
+    launched = Launched()
     if target.is_file() and target.suffix in (".launch", ".xml"):
+        reader = _LaunchReader(workspace, launched)
         reader.read(target.resolve(), {})
     elif target.is_file():
-        reader.launched.nodes.append(_script_node(workspace, target.resolve(), [], str(target)))
+        launched.nodes.append(_script_node(workspace, target.resolve(), [], str(target)))
     else:
-        _read_launcher(workspace, reader, launcher)
-    if not reader.launched.nodes:
-        left = "".join(f" {note[0].upper()}{note[1:]}" for note in reader.launched.notes)
+        for name in [launcher] if isinstance(launcher, str) else launcher:
+            _read_launcher(workspace, _LaunchReader(workspace, launched), name)
+    if not launched.nodes:
+        left = "".join(f" {note[0].upper()}{note[1:]}" for note in launched.notes)
         raise ProjectError(f"{path} starts no node of the project.{left}")
-    return workspace, reader.launched
+    return workspace, launched
 
 
 def _script_node(workspace: Workspace, script: Path, args: List[str], where: str) -> NodeSpec:
@@ -568,7 +576,7 @@ def _read_launcher(workspace: Workspace, reader: _LaunchReader, launcher: str) -
         _launcher_line(workspace, reader, words, where)
         started = reader.launched.nodes[before:]
         for spec in started:
-            spec.stage, spec.foreground = stage, not background
+            spec.launcher, spec.stage, spec.foreground = launcher, stage, not background
         if started and not background:
             stage += 1  # bash runs the next line once this one has ended
 

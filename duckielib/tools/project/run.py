@@ -14,7 +14,7 @@ import time
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple, Union
 
 from duckielib.tools.project.image import ImageEnvironment, image_environment
 from duckielib.tools.project.launch import NodeSpec, launched_nodes
@@ -128,6 +128,8 @@ def _how_it_ended(
         return "ended" + (" (required: the run ended with it)" if spec.required else "")
     if how == "failed":
         return "failed (its traceback is in log.txt)"
+    if how is not None and how.startswith("waiting"):
+        return f"still {how}, stopped"
     if interrupted:
         return "running, stopped by Ctrl-C"
     if simulated >= seconds - 1e-6:
@@ -215,7 +217,7 @@ def _as_on_the_robot(
 
 def run_project(
     path: PathLike,
-    launcher: str = "default",
+    launcher: Union[str, Sequence[str]] = "default",
     noise: Any = "ideal",
     seed: int = 0,
     seconds: float = 30.0,
@@ -272,7 +274,7 @@ def run_project(
         except KeyboardInterrupt as error:  # Ctrl-C: stop as at the end, then say so
             interrupt = error
         finally:
-            at_end = dict(ended)
+            at_end = {**_waiting(graph), **ended}
             bot.shutdown()
             recorder.close()
             files["log"].write_text(
@@ -314,7 +316,7 @@ class _Stages:
         self.bot = bot
         self.specs = specs
         self.ended = ended
-        self.later = sorted((spec for spec in specs if spec.stage > 0), key=lambda s: s.stage)
+        self.later = sorted((s for s in specs if s.stage > 0), key=lambda s: (s.launcher, s.stage))
         self.required = [spec.label for spec in specs if spec.required]
         self._start([spec for spec in specs if spec.stage == 0])
 
@@ -336,23 +338,37 @@ class _Stages:
             return True
         return not self.later and len(self.ended) == len(self.specs)
 
+    def _ready(self) -> List[NodeSpec]:
+        """The next stage of each launcher whose foreground line before it has ended."""
+        ready: List[NodeSpec] = []
+        for launcher in dict.fromkeys(spec.launcher for spec in self.later):
+            stage = min(spec.stage for spec in self.later if spec.launcher == launcher)
+            if all(
+                spec.label in self.ended
+                for spec in self.specs
+                if spec.launcher == launcher and spec.stage == stage - 1 and spec.foreground
+            ):
+                ready += [s for s in self.later if s.launcher == launcher and s.stage == stage]
+        return ready
+
     def next_ready(self) -> bool:
-        """Whether the foreground line before the next stage has ended."""
-        if not self.later:
-            return False
-        waited = self.later[0].stage - 1
-        return all(
-            spec.label in self.ended
-            for spec in self.specs
-            if spec.stage == waited and spec.foreground
-        )
+        """Whether a launcher's next line may start."""
+        return bool(self._ready())
 
     def start_next(self) -> None:
-        """Start the next stage's nodes."""
-        stage = self.later[0].stage
-        starting = [spec for spec in self.later if spec.stage == stage]
-        self.later = self.later[len(starting) :]
+        """Start what may start now."""
+        starting = self._ready()
+        self.later = [spec for spec in self.later if spec not in starting]
         self._start(starting)
+
+
+def _waiting(graph: Any) -> Dict[str, str]:
+    """What the nodes still running wait for, by node name: ``waiting for service /x ...``."""
+    return {
+        node.name: f"waiting for {node.waiting_for[0]} since {node.waiting_for[1]:.1f} s"
+        for node in graph.nodes.values()
+        if node.waiting_for is not None
+    }
 
 
 def _drive(bot: Any, stages: _Stages, seconds: float, failed: Callable[[Exception], None]) -> None:
