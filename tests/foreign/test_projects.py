@@ -234,7 +234,7 @@ def test_nodes_find_the_robots_data_its_clock_and_a_window(tmp_path, monkeypatch
     # cv2's window: the latest frame saved, said once.
     frame = cv2.imread(str(tmp_path / "run" / "windows" / "camera.png"))
     assert frame.shape == (480, 640, 3)
-    assert "[/duckiebot/camera_viewer]: showed 5 frames" in log
+    assert "[/duckiebot/camera_viewer]: showed 5 frames, 0 AprilTags in them" in log
     assert run.notes == [
         "cv2.imshow shows no window here: each window's latest frame is saved in "
         f"{tmp_path / 'run' / 'windows'}, and all its frames are in run.bag on "
