@@ -168,7 +168,7 @@ def test_code_that_hangs_on_import_is_stopped_and_reported(graded):
     ] * 3
     # Notebook 11 loads the student's solution too: its cells that import it run out of time.
     timeouts, driving = stuck.problems
-    assert timeouts.startswith("11_to_the_robot: 5 cells outside the tests raised: cell 4 (mine")
+    assert timeouts.startswith("11_to_the_robot: 6 cells outside the tests raised: cell 4 (mine")
     assert "CellTimeoutError: still running after the 15 s a cell may take" in timeouts
     assert (
         driving == "Driving: the square_then_circle mission did not end within 20 s of wall time."
