@@ -498,10 +498,9 @@ class Bag:
     def __init__(self, path: PathLike) -> None:
         self.path = Path(path)
         self._checked: Optional[Tuple[str]] = None  # what check() found, once it has run
-        if not self.path.exists():
-            raise BagError(f"There is no file {self.path}.")
-        if not self.path.is_file():
-            raise BagError(f"{self.path} is a directory, not a bag file.")
+        why = records.not_a_file(self.path)
+        if why is not None:
+            raise BagError(why)
         with self.path.open("rb") as file:
             if file.read(len(records.MAGIC)) != records.MAGIC:
                 raise BagError(

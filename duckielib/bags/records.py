@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import bz2
 import mmap
+import stat
 import struct
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -626,6 +627,34 @@ def _decompress(compression: str, raw: bytes) -> Tuple[bytes, bool]:
         return b"", False
 
 
+def not_a_file(path: Path) -> Optional[str]:
+    """Why ``path`` cannot be a bag file, in a sentence, without opening it; None if it can.
+
+    A FIFO, a socket or a device is never opened: reading a FIFO blocks until someone
+    writes to it, and a device may never end.
+    """
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        return f"There is no file {path}."
+    except OSError as error:
+        return f"{path} cannot be read: {error.strerror}."
+    if stat.S_ISREG(mode):
+        return None
+    if stat.S_ISDIR(mode):
+        return f"{path} is a directory, not a bag file."
+    kind = (
+        "a FIFO (a named pipe)"
+        if stat.S_ISFIFO(mode)
+        else "a socket"
+        if stat.S_ISSOCK(mode)
+        else "a device"
+        if stat.S_ISCHR(mode) or stat.S_ISBLK(mode)
+        else "not a regular file"
+    )
+    return f"{path} is {kind}, not a bag file: it was not opened. Give the bag's own file."
+
+
 def scan(
     path: Path,
     wanted: Optional[Callable[[Connection], bool]] = None,
@@ -646,6 +675,9 @@ def scan(
     Raises:
         BagError: if the file cannot be read or is not a ROS 1 bag.
     """
+    why = not_a_file(Path(path))
+    if why is not None:
+        raise BagError(why)
     scanner = _Scanner(wanted or (lambda connection: True), read_chunks, check_index)
     result = scanner.result
     try:

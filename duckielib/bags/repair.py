@@ -240,8 +240,9 @@ def repair_bag(source: PathLike, output: PathLike, compression: str = "none") ->
             message could be recovered (the message says what was found instead).
     """
     source, output = Path(source), Path(output)
-    if not source.exists():
-        raise BagError(f"There is no file {source}.")
+    why = records.not_a_file(source)
+    if why is not None:
+        raise BagError(why)
     if output.exists():
         raise BagError(f"{output} exists already; choose another name for the repaired bag.")
     scan = records.scan(source, check_index=True)

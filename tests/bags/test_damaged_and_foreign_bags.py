@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import inspect
 import json
+import os
 import re
 import subprocess
+import sys
 from pathlib import Path
 
 import bagtools
@@ -435,3 +437,26 @@ def test_bags_written_by_debian_rosbag_are_checked_read_and_repaired(tmp_path, c
     assert report.damages
     assert json.loads(_debian(ROSBAG_READ, tmp_path / "fixed.bag")) == report.messages
     assert Bag(tmp_path / "fixed.bag").check() is None
+
+
+@pytest.mark.parametrize("command", ["info", "plot", "odometry", "repair"])
+def test_a_fifo_named_like_a_bag_is_said_for_what_it_is_and_never_opened(tmp_path, command):
+    # Opening a FIFO for reading blocks until someone writes to it: every command must
+    # refuse it from its kind alone, at once.
+    fifo = tmp_path / "run.bag"
+    os.mkfifo(fifo)
+    extra = {"repair": [str(tmp_path / "fixed.bag")], "plot": ["-o", "poses.png"]}.get(command, [])
+    done = subprocess.run(
+        [sys.executable, "-m", "duckielib.tools.cli", "bag", command, str(fifo), *extra],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
+    )
+    assert done.returncode == 1
+    assert done.stderr.strip() == (
+        f"duckie: {fifo} is a FIFO (a named pipe), not a bag file: it was not opened. Give "
+        "the bag's own file."
+    )
+    assert sorted(path.name for path in tmp_path.iterdir()) == ["run.bag"]  # nothing written
