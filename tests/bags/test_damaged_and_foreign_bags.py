@@ -460,3 +460,39 @@ def test_a_fifo_named_like_a_bag_is_said_for_what_it_is_and_never_opened(tmp_pat
         "the bag's own file."
     )
     assert sorted(path.name for path in tmp_path.iterdir()) == ["run.bag"]  # nothing written
+
+
+def test_a_count_no_motor_can_make_is_damage_said_with_where_it_is(tmp_path):
+    # A ROS 1 bag has no checksum: bytes changed inside one tick's data read as a count wrong
+    # by tens of thousands, which moved the odometry 112 m. A wheel at full duty turns about
+    # 580 ticks/s; a jump there and back in 33 ms is damage.
+    period = 33_333_333
+    left = [(n * period, 6 * n) for n in range(90)]
+    right = [(n * period + 1000, 6 * n) for n in range(90)]
+    left[30] = (left[30][0], 77_031 + 180)
+    bag = bagtools.write_encoders(tmp_path / "flipped.bag", left, right)
+    with pytest.raises(BagError) as raised:
+        read_encoders(bag)
+    assert str(raised.value).startswith(
+        "/duckiebot/left_wheel_encoder_node/tick in flipped.bag is damaged at 1.000 s (header "
+        "time): that message says 77,211 ticks, +77,037 from the one 33 ms before it, and the "
+        "next one is back: no motor turns a wheel that fast."
+    )
+    done = subprocess.run(
+        [sys.executable, "-m", "duckielib.tools.cli", "bag", "odometry", str(bag)],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert done.returncode == 1
+    assert "is damaged at 1.000 s" in done.stderr
+
+
+def test_a_driver_that_restarts_its_count_is_not_damage(tmp_path):
+    # The count drops to 0 and goes on from there: a jump that does not come back.
+    period = 33_333_333
+    left = [(n * period, 6 * n if n < 30 else 6 * (n - 30)) for n in range(90)]
+    right = [(n * period + 1000, 6 * n) for n in range(90)]
+    stream, _ = read_encoders(bagtools.write_encoders(tmp_path / "restart.bag", left, right))
+    assert stream.ticks[29:32].tolist() == [174, 0, 6]
