@@ -182,6 +182,22 @@ def _bag_repair(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bag_convert(args: argparse.Namespace) -> int:
+    from duckielib.bags.convert import bag_kind, convert_bag
+
+    target = convert_bag(args.source, args.target, schema=args.schema, storage=args.storage)
+    kind = bag_kind(target)
+    said = {
+        "ros1": "a ROS 1 bag",
+        "mcap": f"an MCAP file with ROS {args.schema[-1]} schemas",
+        "ros2": f"a ROS 2 bag folder ({args.storage})",
+    }[kind]
+    print(f"Wrote {target}: {said}.")
+    if kind == "mcap":
+        print("Open it in Foxglove, Lichtblick or PlotJuggler 4 (File > Open).")
+    return 0
+
+
 def _export(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -643,6 +659,41 @@ def _plugins() -> List[Callable[[argparse._SubParsersAction], None]]:
     return found
 
 
+def _add_bag_writers(bag_commands: argparse._SubParsersAction) -> None:
+    """The ``duckie bag`` commands that write a new bag: ``repair`` and ``convert``."""
+    repair = bag_commands.add_parser(
+        "repair", help="recover every complete message of a bag whose recording was killed"
+    )
+    repair.add_argument("broken", help="the damaged bag (for example run.bag.active)")
+    repair.add_argument("output", help="the repaired bag to write")
+    repair.add_argument("--compression", choices=("none", "bz2"), default="none")
+    repair.set_defaults(handler=_bag_repair)
+
+    convert = bag_commands.add_parser(
+        "convert",
+        help="write a bag as MCAP (for Foxglove, Lichtblick, PlotJuggler 4), as a ROS 2 bag or "
+        "as a ROS 1 bag",
+    )
+    convert.add_argument("source", help="a ROS 1 bag, an MCAP file or a ROS 2 bag folder")
+    convert.add_argument(
+        "target", help="run.mcap (MCAP), run.bag (ROS 1) or run (a ROS 2 bag folder)"
+    )
+    convert.add_argument(
+        "--schema",
+        choices=("ros1", "ros2"),
+        default="ros1",
+        help="an MCAP target's messages: ROS 1 bytes and definitions, nothing lost (default), "
+        "or ROS 2's CDR as rosbag2 writes it (a Header's seq dropped)",
+    )
+    convert.add_argument(
+        "--storage",
+        choices=("mcap", "sqlite3"),
+        default="mcap",
+        help="a ROS 2 bag folder's storage (default mcap)",
+    )
+    convert.set_defaults(handler=_bag_convert)
+
+
 def _parser() -> argparse.ArgumentParser:
     from duckielib.missions import TASK_START
 
@@ -734,13 +785,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     odometry.set_defaults(handler=_bag_odometry)
 
-    repair = bag_commands.add_parser(
-        "repair", help="recover every complete message of a bag whose recording was killed"
-    )
-    repair.add_argument("broken", help="the damaged bag (for example run.bag.active)")
-    repair.add_argument("output", help="the repaired bag to write")
-    repair.add_argument("--compression", choices=("none", "bz2"), default="none")
-    repair.set_defaults(handler=_bag_repair)
+    _add_bag_writers(bag_commands)
 
     _add_robot(commands)
     _add_simulator(commands)
