@@ -2,7 +2,9 @@
 
 This package is the only place rosbags is imported. Bags written here open in ``rosbag
 info``/``rosbag play`` and Foxglove; bags recorded on a Duckiebot open here with the message
-definitions embedded in them.
+definitions embedded in them. :class:`Bag` (and so everything that reads a bag) also opens
+MCAP files and ROS 2 bag folders, as a ROS 1 copy made once; :func:`convert_bag` writes a bag
+as MCAP or a ROS 2 bag, for today's viewers.
 
 Modules (one idea each):
     io: :class:`Bag` (read) and :class:`BagWriter` (write, uncompressed or BZ2).
@@ -11,6 +13,7 @@ Modules (one idea each):
     records: the bag's records in file order, even from a damaged file.
     analysis: topics as arrays, odometry replayed from encoder ticks, pose tracks.
     samples: :func:`sample_bag`, bags that come with the course.
+    convert: :func:`convert_bag`, to and from MCAP and ROS 2 bags.
 
 A damaged bag is never read in part as if it were whole: reading checks every record and
 the index's counts, and raises a :class:`~duckielib.errors.BagError` saying where the damage
@@ -45,12 +48,14 @@ from duckielib.bags.analysis import (
     read_topic,
     replay_odometry,
 )
+from duckielib.bags.convert import convert_bag
 from duckielib.bags.io import Bag, BagMessage, BagWriter, TopicInfo, course_typestore
 from duckielib.bags.recorder import BagRecorder, record
 from duckielib.bags.repair import RepairReport, repair_bag
 from duckielib.bags.samples import SAMPLES, sample_bag
 
 __all__ = [
+    "convert_bag",
     "Bag",
     "BagMessage",
     "BagRecorder",

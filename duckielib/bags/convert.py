@@ -27,10 +27,10 @@ from pathlib import Path
 from typing import Any, Dict, Tuple
 
 from duckielib.bags import records
-from duckielib.bags.io import Bag, BagWriter, PathLike
+from duckielib.bags.io import TO_ROS1, Bag, BagWriter, PathLike
 from duckielib.errors import BagError
 
-__all__ = ["bag_kind", "convert_bag"]
+__all__ = ["bag_kind", "convert_bag", "to_ros1"]
 
 _MCAP_MAGIC = b"\x89MCAP0\r\n"
 
@@ -108,7 +108,7 @@ def convert_bag(
         raise BagError(f"There is no folder {target.parent} to write {target.name} in.")
     with tempfile.TemporaryDirectory(prefix=".converting-", dir=target.parent) as work:
         folder = Path(work)
-        ros1 = source if kind == "ros1" else _to_ros1(source, kind, folder / "source.bag")
+        ros1 = source if kind == "ros1" else to_ros1(source, kind, folder / "source.bag")
         written = folder / ("out" + target.suffix)
         if wanted == "ros1":
             if ros1 == source:
@@ -128,7 +128,7 @@ def convert_bag(
     return target
 
 
-def _to_ros1(source: Path, kind: str, out: Path) -> Path:
+def to_ros1(source: Path, kind: str, out: Path) -> Path:
     """A ROS 1 bag of an MCAP file or a ROS 2 bag folder, written to ``out``."""
     if kind == "mcap" and _mcap_encodings(source) == {"ros1msg"}:
         _mcap_to_ros1(source, out)
@@ -238,3 +238,6 @@ def _md5(schema: Any) -> str:
     store = get_typestore(Stores.EMPTY)
     store.register(get_types_from_msg(schema.data.decode(), schema.name))
     return str(store.generate_msgdef(schema.name.replace("/", "/msg/", 1))[1])
+
+
+TO_ROS1.append(to_ros1)  # what Bag uses to read an MCAP file or a ROS 2 bag folder

@@ -470,6 +470,44 @@ class _Chunk:
     messages: int
 
 
+_MCAP_MAGIC = b"\x89MCAP0\r\n"
+_FORMATS = {"mcap": "an MCAP file", "ros2": "a ROS 2 bag folder"}
+#: How an MCAP file or a ROS 2 bag becomes a ROS 1 bag: ``to_ros1(source, kind, out)``, set
+#: by :mod:`duckielib.bags.convert` (which imports this module) when the package is imported.
+TO_ROS1: List[Callable[[Path, str, Path], Any]] = []
+
+
+def ros1_copy(path: Path, kind: str) -> Path:
+    """A ROS 1 bag of an MCAP file or a ROS 2 bag folder, made once and kept while unchanged.
+
+    The copy lives in the system's temporary folder, named after the source's path, size and
+    time of change; a source that changes is copied anew.
+
+    Raises:
+        BagError: if the source cannot be read or is damaged.
+    """
+    import hashlib
+    import tempfile
+
+    files = sorted(path.rglob("*")) if path.is_dir() else [path]
+    stamp = "|".join(
+        f"{each.resolve()}:{each.stat().st_size}:{each.stat().st_mtime_ns}"
+        for each in files
+        if each.is_file()
+    )
+    folder = Path(tempfile.gettempdir()) / "duckielib-bags"
+    folder.mkdir(exist_ok=True)
+    copy = folder / f"{path.stem}-{hashlib.sha256(stamp.encode()).hexdigest()[:16]}.bag"
+    if not copy.is_file():
+        partial = copy.with_name(f"{copy.stem}.{os.getpid()}.partial.bag")
+        try:
+            TO_ROS1[0](path, kind, partial)
+            partial.replace(copy)
+        finally:
+            partial.unlink(missing_ok=True)
+    return copy
+
+
 class Bag:
     """A ROS 1 bag, opened for reading.
 
@@ -498,17 +536,29 @@ class Bag:
     def __init__(self, path: PathLike) -> None:
         self.path = Path(path)
         self._checked: Optional[Tuple[str]] = None  # what check() found, once it has run
-        why = records.not_a_file(self.path)
-        if why is not None:
-            raise BagError(why)
-        with self.path.open("rb") as file:
-            if file.read(len(records.MAGIC)) != records.MAGIC:
+        #: The format it was in: "ros1", "mcap" (an MCAP file) or "ros2" (a ROS 2 bag folder).
+        self.format = (
+            "ros2" if self.path.is_dir() and (self.path / "metadata.yaml").is_file() else "ros1"
+        )
+        if self.format == "ros1":
+            why = records.not_a_file(self.path)
+            if why is not None:
+                raise BagError(why)
+            with self.path.open("rb") as file:
+                start = file.read(len(records.MAGIC))
+            if start.startswith(_MCAP_MAGIC):
+                self.format = "mcap"
+            elif start != records.MAGIC:
                 raise BagError(
-                    f"{self.path} is not a ROS 1 bag: it does not start with '#ROSBAG V2.0'."
+                    f"{self.path} is not a ROS 1 bag: it does not start with '#ROSBAG V2.0' "
+                    "(nor is it an MCAP file or a ROS 2 bag folder)."
                 )
-        layout = records.scan(self.path, read_chunks=False)
+        #: The ROS 1 bag that is read: the file itself, or the MCAP file or ROS 2 bag made
+        #: into one once (see :func:`ros1_copy`).
+        self.file = self.path if self.format == "ros1" else ros1_copy(self.path, self.format)
+        layout = records.scan(self.file, read_chunks=False)
         try:
-            reader = Reader(self.path)
+            reader = Reader(self.file)
             reader.open()
         except Exception as error:  # rosbags raises more than ReaderError on damaged bytes
             raise BagError(_unreadable(self.path, layout, error)) from None
@@ -571,7 +621,7 @@ class Bag:
     def compression(self) -> str:
         """``none``, ``bz2`` or ``lz4``: how the chunks are compressed, read from their headers."""
         kinds = set()
-        with self.path.open("rb") as file:
+        with self.file.open("rb") as file:
             for position in self._chunk_positions:
                 file.seek(position)
                 length = int.from_bytes(file.read(4), "little")
@@ -596,7 +646,7 @@ class Bag:
             messages it affects, and how to recover them.
         """
         if self._checked is None:
-            scan = records.scan(self.path, lambda connection: False, check_index=True)
+            scan = records.scan(self.file, lambda connection: False, check_index=True)
             counted = self._counted(scan, list(self.topics))
             if not scan.damages and not any(read != listed for _, read, listed in counted):
                 self._checked = ("",)
@@ -611,11 +661,14 @@ class Bag:
         Args:
             check: also read every record (see :meth:`check`) and say what is damaged.
         """
-        size = self.path.stat().st_size
+        files = sorted(self.path.rglob("*")) if self.path.is_dir() else [self.path]
+        size = sum(each.stat().st_size for each in files if each.is_file())
         problem = self.check() if check else None
         lines = [
             f"path:        {self.path}",
-            "version:     2.0",
+            "version:     2.0"
+            if self.format == "ros1"
+            else f"format:      {_FORMATS[self.format]}, read as a ROS 1 bag",
             f"duration:    {self.duration:.1f}s",
             f"start:       {self.start_ns / NS_PER_S:.2f} s",
             f"end:         {self.end_ns / NS_PER_S:.2f} s",
@@ -690,7 +743,7 @@ class Bag:
         """``(connection id, record time in ns, bytes)`` of the topics' messages, by time."""
         names = [self.topic(name).name for name in topics]
         wanted = {cid for name in names for cid in self._topic_connections[name]}
-        scan = records.scan(self.path, lambda connection: connection.id in wanted)
+        scan = records.scan(self.file, lambda connection: connection.id in wanted)
         counted = self._counted(scan, names)
         if scan.damages or any(read != listed for _, read, listed in counted):
             raise BagError(

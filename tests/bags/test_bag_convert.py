@@ -8,7 +8,7 @@ import pytest
 from mcap.reader import make_reader
 from rosbags.highlevel import AnyReader
 
-from duckielib.bags import Bag, sample_bag
+from duckielib.bags import Bag, read_encoders, sample_bag
 from duckielib.bags.convert import bag_kind, convert_bag
 from duckielib.errors import BagError
 from duckielib.tools.cli import main
@@ -95,3 +95,38 @@ def test_bad_targets_and_sources_are_said_and_nothing_is_left(mission, tmp_path,
         "taken.mcap",
         "whole.mcap",
     ]
+
+
+@pytest.mark.parametrize(
+    ("name", "options", "format_"),
+    [
+        ("run.mcap", {}, "an MCAP file"),
+        ("run2.mcap", {"schema": "ros2"}, "an MCAP file"),
+        ("run", {"storage": "sqlite3"}, "a ROS 2 bag folder"),
+    ],
+)
+def test_every_reader_of_the_course_opens_mcap_and_ros2_bags(
+    mission, tmp_path, capsys, name, options, format_
+):
+    source = convert_bag(mission.path, tmp_path / name, **options)
+    bag = Bag(source)
+    assert bag.path == source
+    assert bag.message_count == mission.message_count
+    assert without_seq(bag) == without_seq(mission)
+    left, _ = read_encoders(source)
+    original_left, _ = read_encoders(mission)
+    assert left.ticks.tolist() == original_left.ticks.tolist()
+    assert main(["bag", "info", str(source)]) == 0
+    out = capsys.readouterr().out
+    assert out.splitlines()[:2] == [
+        f"path:        {source}",
+        f"format:      {format_}, read as a ROS 1 bag",
+    ]
+
+
+def test_a_damaged_mcap_file_is_said_by_the_commands_that_read_it(mission, tmp_path, capsys):
+    whole = convert_bag(mission.path, tmp_path / "whole.mcap").read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(whole[: len(whole) // 3])
+    assert main(["bag", "info", str(cut)]) == 1
+    assert capsys.readouterr().err.startswith(f"duckie: {cut} is ")
