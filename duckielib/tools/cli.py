@@ -279,6 +279,16 @@ def _mission(args: argparse.Namespace) -> int:
         stall_limit=args.stall_limit,
     )
     print(run.text())
+    if args.mcap:
+        from pathlib import Path
+
+        from duckielib.bags.convert import convert_bag
+
+        bag = Path(run.files["bag"])
+        mcap = bag.with_suffix(".mcap")
+        mcap.unlink(missing_ok=True)  # a previous run's, in the same folder
+        convert_bag(bag, mcap)
+        print(f"wrote {mcap}: the same run as MCAP, for Foxglove, Lichtblick or PlotJuggler 4")
     return 0
 
 
@@ -391,6 +401,12 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
     )
     mission.add_argument(
         "--no-figure", action="store_true", help="skip trajectory.png (the grader draws its own)"
+    )
+    mission.add_argument(
+        "--mcap",
+        action="store_true",
+        help="also write the run as mission.mcap (ROS 1 schemas, every message), which "
+        "Foxglove, Lichtblick and PlotJuggler 4 open",
     )
     mission.add_argument(
         "--stall-limit",

@@ -130,3 +130,21 @@ def test_a_damaged_mcap_file_is_said_by_the_commands_that_read_it(mission, tmp_p
     cut.write_bytes(whole[: len(whole) // 3])
     assert main(["bag", "info", str(cut)]) == 1
     assert capsys.readouterr().err.startswith(f"duckie: {cut} is ")
+
+
+def test_duckie_mission_writes_the_run_as_mcap_beside_its_bag(tmp_path, capsys):
+    out = tmp_path / "run"
+    command = ["mission", "--mission", "straight", "--no-animation", "--no-figure", "--mcap"]
+    assert main([*command, "--out", str(out)]) == 0
+    assert (
+        capsys.readouterr()
+        .out.rstrip()
+        .endswith(
+            f"wrote {out / 'mission.mcap'}: the same run as MCAP, for Foxglove, Lichtblick or "
+            "PlotJuggler 4"
+        )
+    )
+    with (out / "mission.mcap").open("rb") as file:
+        count = make_reader(file).get_summary().statistics.message_count
+    assert count == Bag(out / "mission.bag").message_count > 1000
+    assert main([*command, "--out", str(out)]) == 0  # again, over the last run's files
