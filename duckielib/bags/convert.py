@@ -32,8 +32,6 @@ from duckielib.errors import BagError
 
 __all__ = ["bag_kind", "convert_bag", "to_ros1"]
 
-_MCAP_MAGIC = b"\x89MCAP0\r\n"
-
 
 def bag_kind(path: PathLike) -> str:
     """What a bag is, from its contents: ``"ros1"``, ``"mcap"`` or ``"ros2"`` (a folder).
@@ -42,25 +40,19 @@ def bag_kind(path: PathLike) -> str:
         BagError: if it is none of them (said in a sentence), or is not a file or folder.
     """
     path = Path(path)
-    if path.is_dir():
-        if (path / "metadata.yaml").is_file():
-            return "ros2"
+    if path.is_dir() and not (path / "metadata.yaml").is_file():
         raise BagError(
             f"{path} is a directory, not a bag file (a ROS 2 bag folder holds a metadata.yaml)."
         )
-    why = records.not_a_file(path)
-    if why is not None:
-        raise BagError(why)
-    with path.open("rb") as file:
-        start = file.read(max(len(records.MAGIC), len(_MCAP_MAGIC)))
-    if start.startswith(records.MAGIC):
-        return "ros1"
-    if start.startswith(_MCAP_MAGIC):
-        return "mcap"
-    raise BagError(
-        f"{path} is neither a ROS 1 bag, an MCAP file nor a ROS 2 bag folder: it starts with "
-        f"{start[:8]!r}."
-    )
+    found = records.bag_format(path)
+    if found is None:
+        with path.open("rb") as file:
+            start = file.read(8)
+        raise BagError(
+            f"{path} is neither a ROS 1 bag, an MCAP file nor a ROS 2 bag folder: it starts "
+            f"with {start!r}."
+        )
+    return found
 
 
 def _target_kind(target: Path) -> str:

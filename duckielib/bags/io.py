@@ -95,6 +95,9 @@ def rosbags_version() -> str:
 
 #: The signals a command ends on: Ctrl-C, and SIGTERM where ``duckie`` takes it.
 _ENDING_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+#: How many :func:`uninterrupted` blocks the main thread is in (only the outermost swaps the
+#: handlers).
+_DEFERRING = [0]
 
 
 @contextlib.contextmanager
@@ -107,8 +110,8 @@ def uninterrupted() -> Iterator[None]:
     was in place runs when the block ends (it raises ``KeyboardInterrupt`` then, as it would
     have). Other threads never run signal handlers, so there the block changes nothing.
     """
-    if threading.current_thread() is not threading.main_thread():
-        yield
+    if threading.current_thread() is not threading.main_thread() or _DEFERRING[0]:
+        yield  # another thread, or inside an outer block that already holds the signals
         return
     handlers: Dict[int, Callable[[int, Any], Any]] = {}
     for ending in _ENDING_SIGNALS:
@@ -118,9 +121,11 @@ def uninterrupted() -> Iterator[None]:
     pending: List[Tuple[int, Any]] = []
     for taken in handlers:
         signal.signal(taken, lambda got, frame: pending.append((got, frame)))
+    _DEFERRING[0] += 1
     try:
         yield
     finally:
+        _DEFERRING[0] -= 1
         for taken, handler in handlers.items():
             signal.signal(taken, handler)
         for got, frame in pending[:1]:
@@ -470,7 +475,6 @@ class _Chunk:
     messages: int
 
 
-_MCAP_MAGIC = b"\x89MCAP0\r\n"
 _FORMATS = {"mcap": "an MCAP file", "ros2": "a ROS 2 bag folder"}
 #: How an MCAP file or a ROS 2 bag becomes a ROS 1 bag: ``to_ros1(source, kind, out)``, set
 #: by :mod:`duckielib.bags.convert` (which imports this module) when the package is imported.
@@ -490,11 +494,8 @@ def ros1_copy(path: Path, kind: str) -> Path:
     import tempfile
 
     files = sorted(path.rglob("*")) if path.is_dir() else [path]
-    stamp = "|".join(
-        f"{each.resolve()}:{each.stat().st_size}:{each.stat().st_mtime_ns}"
-        for each in files
-        if each.is_file()
-    )
+    stats = [(each.resolve(), each.stat()) for each in files if each.is_file()]
+    stamp = "|".join(f"{name}:{found.st_size}:{found.st_mtime_ns}" for name, found in stats)
     folder = Path(tempfile.gettempdir()) / "duckielib-bags"
     folder.mkdir(exist_ok=True)
     copy = folder / f"{path.stem}-{hashlib.sha256(stamp.encode()).hexdigest()[:16]}.bag"
@@ -537,22 +538,13 @@ class Bag:
         self.path = Path(path)
         self._checked: Optional[Tuple[str]] = None  # what check() found, once it has run
         #: The format it was in: "ros1", "mcap" (an MCAP file) or "ros2" (a ROS 2 bag folder).
-        self.format = (
-            "ros2" if self.path.is_dir() and (self.path / "metadata.yaml").is_file() else "ros1"
-        )
-        if self.format == "ros1":
-            why = records.not_a_file(self.path)
-            if why is not None:
-                raise BagError(why)
-            with self.path.open("rb") as file:
-                start = file.read(len(records.MAGIC))
-            if start.startswith(_MCAP_MAGIC):
-                self.format = "mcap"
-            elif start != records.MAGIC:
-                raise BagError(
-                    f"{self.path} is not a ROS 1 bag: it does not start with '#ROSBAG V2.0' "
-                    "(nor is it an MCAP file or a ROS 2 bag folder)."
-                )
+        found = records.bag_format(self.path)
+        if found is None:
+            raise BagError(
+                f"{self.path} is not a ROS 1 bag: it does not start with '#ROSBAG V2.0' "
+                "(nor is it an MCAP file or a ROS 2 bag folder)."
+            )
+        self.format: str = found
         #: The ROS 1 bag that is read: the file itself, or the MCAP file or ROS 2 bag made
         #: into one once (see :func:`ros1_copy`).
         self.file = self.path if self.format == "ros1" else ros1_copy(self.path, self.format)

@@ -655,6 +655,31 @@ def not_a_file(path: Path) -> Optional[str]:
     return f"{path} is {kind}, not a bag file: it was not opened. Give the bag's own file."
 
 
+#: The first bytes of an MCAP file.
+MCAP_MAGIC = b"\x89MCAP0\r\n"
+
+
+def bag_format(path: Path) -> Optional[str]:
+    """A bag's format from its contents: ``"ros1"``, ``"mcap"`` or ``"ros2"``; None if none.
+
+    ``"ros2"`` is a ROS 2 bag folder (one with a ``metadata.yaml``).
+
+    Raises:
+        BagError: if it is missing, or not a regular file nor a ROS 2 bag folder (see
+            :func:`not_a_file`).
+    """
+    if path.is_dir() and (path / "metadata.yaml").is_file():
+        return "ros2"
+    why = not_a_file(path)
+    if why is not None:
+        raise BagError(why)
+    with path.open("rb") as file:
+        start = file.read(max(len(MAGIC), len(MCAP_MAGIC)))
+    if start.startswith(MAGIC):
+        return "ros1"
+    return "mcap" if start.startswith(MCAP_MAGIC) else None
+
+
 def scan(
     path: Path,
     wanted: Optional[Callable[[Connection], bool]] = None,

@@ -118,6 +118,23 @@ def robot_data(folder: Path) -> Iterator[Path]:
 _CLOCKS = ("time", "monotonic", "perf_counter", "time_ns", "monotonic_ns", "perf_counter_ns")
 
 
+def _node_code_under(root: Path) -> Callable[[int], bool]:
+    """A test, ``called(depth)``: is this code, ``depth`` frames up, the project's node code?
+
+    True when that frame's file is under ``root`` and it runs in a node's code (not a library,
+    not the notebook).
+    """
+    from duckielib.ros.rospy.timing import calling_node
+
+    prefix = str(root) + os.sep
+
+    def called(depth: int) -> bool:
+        caller = sys._getframe(depth + 1).f_code.co_filename
+        return caller.startswith(prefix) and calling_node() is not None
+
+    return called
+
+
 @contextlib.contextmanager
 def node_clocks(root: Path, simulated: Callable[[], float]) -> Iterator[None]:
     """While inside, the clocks read from files under ``root``, in a node's code, are simulated.
@@ -126,9 +143,7 @@ def node_clocks(root: Path, simulated: Callable[[], float]) -> Iterator[None]:
         root: the project's folder: only its own files see the simulated clock.
         simulated: the simulated time, in seconds.
     """
-    from duckielib.ros.rospy.timing import calling_node
-
-    prefix = str(root) + os.sep
+    in_node_code = _node_code_under(root)
     walls = {name: getattr(time, name) for name in _CLOCKS}
     epoch = walls["time"]() - simulated()  # time.time() goes on from the wall clock's now
 
@@ -138,8 +153,7 @@ def node_clocks(root: Path, simulated: Callable[[], float]) -> Iterator[None]:
         in_ns = name.endswith("_ns")
 
         def read() -> Any:
-            caller = sys._getframe(1).f_code.co_filename
-            if not caller.startswith(prefix) or calling_node() is None:
+            if not in_node_code(1):
                 return wall()
             seconds = simulated() + offset
             return int(seconds * 1_000_000_000) if in_ns else seconds
@@ -168,26 +182,20 @@ def robot_hostname(root: Path, name: str) -> Iterator[None]:
     import platform
     import socket
 
-    from duckielib.ros.rospy.timing import calling_node
-
-    prefix = str(root) + os.sep
+    in_node_code = _node_code_under(root)
     laptop_hostname, laptop_uname, laptop_node = socket.gethostname, os.uname, platform.node
 
-    def in_node_code() -> bool:
-        caller = sys._getframe(2).f_code.co_filename
-        return caller.startswith(prefix) and calling_node() is not None
-
     def gethostname() -> str:
-        return name if in_node_code() else laptop_hostname()
+        return name if in_node_code(1) else laptop_hostname()
 
     def uname() -> Any:
         found = laptop_uname()
-        if not in_node_code():
+        if not in_node_code(1):
             return found
         return os.uname_result((found.sysname, name, found.release, found.version, found.machine))
 
     def node() -> str:
-        return name if in_node_code() else laptop_node()
+        return name if in_node_code(1) else laptop_node()
 
     try:
         socket.gethostname, platform.node = gethostname, node

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Dict, Optional, Type
 
-from duckielib.errors import MessageError, UnknownTypeError
+from duckielib.errors import MessageError
 from duckielib.messages import Message, get_service_class
 from duckielib.messages import Service as ServiceType
 from duckielib.ros.context import (
@@ -26,7 +26,7 @@ from duckielib.ros.node import Node, ServiceRecord
 from duckielib.ros.rospy.client import spin
 from duckielib.ros.rospy.core import _node_or_later
 from duckielib.ros.rospy.timing import _to_ns
-from duckielib.ros.rospy.topics import _to_message
+from duckielib.ros.rospy.topics import _course_equivalent, _to_message
 
 
 # -- services -----------------------------------------------------------------------------------
@@ -46,22 +46,7 @@ def _course_service_class(service_class: Any, what: str) -> Any:
         )
     if hasattr(service_class._request_class, "from_bytes"):
         return service_class  # the course's own
-    name = str(getattr(service_class, "_type", service_class.__name__))
-    try:
-        ours = get_service_class(name)
-    except UnknownTypeError:
-        raise ValueError(
-            f"{what}: {name} comes from a module generated outside this course, for a type the "
-            "course does not know. Put its .srv file in the srv/ folder of your package, beside "
-            "your node, and import it from there."
-        ) from None
-    theirs = getattr(service_class, "_md5sum", "?")
-    if ours._md5sum != theirs:
-        raise ValueError(
-            f"{what}: your {name} has another definition than the robot's (md5 sum "
-            f"{theirs}, the robot's is {ours._md5sum}); use the robot's definition."
-        )
-    return ours
+    return _course_equivalent(service_class, get_service_class, ".srv file in the srv/", what)
 
 
 class Service:

@@ -96,19 +96,32 @@ def _course_class(data_class: Any, what: str) -> Any:
     _check_data_class(data_class, what)
     if hasattr(data_class, "from_bytes"):
         return data_class  # the course's own (or AnyMsg)
-    name = str(getattr(data_class, "_type", data_class.__name__))
+    return _course_equivalent(data_class, messages_get_class, ".msg file in the msg/", what)
+
+
+def _course_equivalent(
+    generated: Any, course_class: Callable[[str], Any], folder: str, what: str
+) -> Any:
+    """The course's class of the type of a class generated elsewhere (a message or service).
+
+    Raises:
+        ValueError: if the course does not know its type (its ``folder`` file is then to put
+            beside the node), or knows another definition of it (another md5 sum).
+    """
+    name = str(getattr(generated, "_type", generated.__name__))
     try:
-        ours = messages_get_class(name)
+        ours = course_class(name)
     except UnknownTypeError:
         raise ValueError(
             f"{what}: {name} comes from a module generated outside this course, for a type the "
-            "course does not know. Put its .msg file in the msg/ folder of your package, beside "
-            "your node, and import it from there."
+            f"course does not know. Put its {folder} folder of your package, beside your node, "
+            "and import it from there."
         ) from None
-    if ours._md5sum != data_class._md5sum:
+    theirs = getattr(generated, "_md5sum", "?")
+    if ours._md5sum != theirs:
         raise ValueError(
             f"{what}: your {name} has another definition than the robot's (md5 sum "
-            f"{data_class._md5sum}, the robot's is {ours._md5sum}); use the robot's definition."
+            f"{theirs}, the robot's is {ours._md5sum}); use the robot's definition."
         )
     return ours
 
