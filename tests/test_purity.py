@@ -26,6 +26,8 @@ LAPTOP_ONLY = (
     "nbgrader",
     "jupyterlab",
     "greenlet",
+    "foxglove",
+    "mcap",
 )
 
 
@@ -181,6 +183,7 @@ EDGES = {
     # other formats (ROS 2 bags, CDR) to rosbags' public converter.
     "rosbags": ("duckielib/bags/io.py", "duckielib/bags/convert.py"),
     "matplotlib": ("duckielib/plots/", "duckielib/sim/examples/"),
+    "foxglove": ("duckielib/sim/live.py",),
 }
 
 

@@ -481,6 +481,10 @@ _FORMATS = {"mcap": "an MCAP file", "ros2": "a ROS 2 bag folder"}
 TO_ROS1: List[Callable[[Path, str, Path], Any]] = []
 
 
+#: The version of how ROS 1 copies are made; a change here makes every copy anew.
+_COPY_VERSION = 2
+
+
 def ros1_copy(path: Path, kind: str) -> Path:
     """A ROS 1 bag of an MCAP file or a ROS 2 bag folder, made once and kept while unchanged.
 
@@ -496,6 +500,7 @@ def ros1_copy(path: Path, kind: str) -> Path:
     files = sorted(path.rglob("*")) if path.is_dir() else [path]
     stats = [(each.resolve(), each.stat()) for each in files if each.is_file()]
     stamp = "|".join(f"{name}:{found.st_size}:{found.st_mtime_ns}" for name, found in stats)
+    stamp += f"|copy {_COPY_VERSION}"  # a copy made by an older reading is not trusted
     folder = Path(tempfile.gettempdir()) / "duckielib-bags"
     folder.mkdir(exist_ok=True)
     copy = folder / f"{path.stem}-{hashlib.sha256(stamp.encode()).hexdigest()[:16]}.bag"

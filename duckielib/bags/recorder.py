@@ -29,7 +29,7 @@ import re
 import threading
 import time
 from pathlib import Path
-from typing import Any, Deque, Dict, Iterable, Optional, Tuple
+from typing import Any, Callable, Deque, Dict, Iterable, List, Optional, Tuple
 
 from duckielib.bags.io import BagWriter, PathLike, uninterrupted
 from duckielib.errors import BagError
@@ -39,7 +39,7 @@ from duckielib.ros.graph import Graph, default_graph
 from duckielib.ros.log import ERROR
 from duckielib.ros.rospy import AnyMsg, Subscriber
 
-__all__ = ["BagRecorder", "record"]
+__all__ = ["BagRecorder", "Tap", "record"]
 
 #: How often, in simulated seconds, a recorder of all topics looks for new ones.
 _DISCOVERY_PERIOD_NS = 100_000_000
@@ -50,43 +50,35 @@ _BATCH = 256
 _numbers = itertools.count(1)
 
 
-class _Recording(Subscriber):
-    """A subscription of ``rosbag record``: keeps each message's bytes as published.
+class Tap(Subscriber):
+    """A subscription that hands each message's bytes, as published, to ``deliver``.
 
-    This class is the recorder's only tie to the internals of
-    :class:`duckielib.ros.rospy.Subscriber`, which has no public way to take a message's bytes
-    as it is published. It relies on two private names (``tests/bags/test_recorder_seam.py``
-    checks both):
+    ``deliver(record, data)`` is called within ``publish()`` with the topic's record (its
+    ``name`` and ``connection_header()``) and the message's serialized bytes, undecoded; also
+    from ``__init__`` with the topic's latched messages. It runs no node code, so it must be
+    quick: ``rosbag record`` (:class:`BagRecorder`) and the live view
+    (:class:`duckielib.sim.live.LiveView`) use it.
+
+    This class is the only tie to the internals of :class:`duckielib.ros.rospy.Subscriber`,
+    which has no public way to take a message's bytes as it is published. It relies on two
+    private names (``tests/bags/test_recorder_seam.py`` checks both):
 
     - ``Subscriber._enqueue(self, data: bytes) -> None``, overridden here: rospy calls it with
       each message's serialized bytes, within ``publish()``, and from ``Subscriber.__init__``
-      with the topic's latched messages. The base method queues them for a callback; a
-      recording has none, so it neither queues nor decodes.
+      with the topic's latched messages. The base method queues them for a callback; a tap
+      has none, so it neither queues nor decodes.
     - ``Subscriber._record``: the topic's record (its ``name`` and ``connection_header()``),
       set before the latched messages arrive and None once unsubscribed.
     """
 
-    def __init__(self, topic: str, recorder: BagRecorder) -> None:
-        # First: a latched message arrives while subscribing.
-        self._recorder = recorder
-        self._graph = recorder.graph
-        self._pending = recorder._pending
-        self._batch = recorder._batch
-        self._connection: Any = None
+    def __init__(self, topic: str, deliver: Callable[[Any, bytes], None]) -> None:
+        self._deliver = deliver  # first: a latched message arrives while subscribing
         super().__init__(topic, AnyMsg, queue_size=None)
 
     def _enqueue(self, data: bytes) -> None:  # overrides rospy's private method: see above
-        connection = self._connection
-        if connection is None:
-            if self._record is None:
-                return
-            connection = self._connection = self._recorder._connect(self._record)
-            if connection is None:  # the recording has stopped
-                return
-        pending = self._pending
-        pending.append((connection, self._graph.now_ns, data))
-        if len(pending) >= self._batch:
-            self._recorder._write_pending()
+        record = self._record
+        if record is not None:
+            self._deliver(record, data)
 
 
 class BagRecorder:
@@ -189,7 +181,24 @@ class BagRecorder:
             return
         self._counts.setdefault(topic, 0)
         with node_context(self._node):
-            self._subscribed[topic] = _Recording(topic, self)
+            self._subscribed[topic] = Tap(topic, self._taker())
+
+    def _taker(self) -> Callable[[Any, bytes], None]:
+        """What a topic's tap calls with each message: keep it for the next batch."""
+        graph, pending, batch = self.graph, self._pending, self._batch
+        connection: List[Any] = []  # the bag's connection, made at the topic's first message
+
+        def take(record: Any, data: bytes) -> None:
+            if not connection:
+                made = self._connect(record)
+                if made is None:  # the recording has stopped
+                    return
+                connection.append(made)
+            pending.append((connection[0], graph.now_ns, data))
+            if len(pending) >= batch:
+                self._write_pending()
+
+        return take
 
     def _discover(self) -> None:
         if self.closed:

@@ -57,6 +57,8 @@ class RepairReport:
         cut: a sentence saying where the file ends inside a record, or None.
         bytes_unread: bytes at the end of the source that held no complete record.
         start_ns, end_ns: record times of the first and last message recovered.
+        format: the source's format, ``"ros1"`` or ``"mcap"`` (whose index is its summary,
+            and whose damage is said chunk by chunk).
     """
 
     source: Path
@@ -81,6 +83,7 @@ class RepairReport:
     bytes_unread: int = 0
     start_ns: int = 0
     end_ns: int = 0
+    format: str = "ros1"
 
     @property
     def messages(self) -> int:
@@ -95,6 +98,18 @@ class RepairReport:
     def _index_state(self) -> List[str]:
         """A sentence on the source's index: missing, lost, not matching, or short."""
         lines: List[str] = []
+        if self.format == "mcap":
+            if not self.was_indexed:
+                lines.append(
+                    "It had no summary (an MCAP file's index): it was cut short or never "
+                    "closed; it was read from its start up to its damage."
+                )
+            elif self.found < self.listed:
+                lines.append(
+                    f"{self.listed - self.found} of the {_count(self.listed, 'message')} its "
+                    "summary lists were lost in the damage."
+                )
+            return lines
         if self.header_damaged:
             lines.append(
                 "Its bag header (the first record, in the file's first 4 KB) was damaged, so "
@@ -133,7 +148,9 @@ class RepairReport:
         if not self.damaged:
             return ["The bag was not damaged: it was closed properly, and the copy is whole."]
         lines = self._index_state()
-        if self.damages:
+        if self.damages and self.format == "mcap":
+            lines += [f"  {text}." for text in self.damages[:_LISTED_DAMAGES]]
+        elif self.damages:
             count = len(self.damages)
             stretches = "stretch was" if count == 1 else "stretches were"
             after = "it" if count == 1 else "each"
@@ -173,6 +190,42 @@ class RepairReport:
         for topic, count in sorted(self.counts.items()):
             lines.append(f"  {topic}: {count} messages")
         return "\n".join(lines + self.state())
+
+
+def _repair_mcap(source: Path, output: Path, compression: str) -> RepairReport:
+    """Every message of a damaged MCAP file (ROS 1 schemas) that can be read, into a ROS 1 bag.
+
+    The chunks the file's summary lists are read one by one, each checked by its CRC, so a
+    damaged chunk costs only its own messages; a file without its summary is read from its
+    start up to its damage.
+    """
+    from duckielib.bags.convert import _mcap_to_ros1, scan_mcap
+
+    found = scan_mcap(source)
+    report = RepairReport(source, output, was_indexed=found.summarised, format="mcap")
+    report.damages = list(found.damages)
+    report.listed, report.found = found.listed, len(found.messages)
+    if not found.messages:
+        state = " ".join(report.state()) if report.damaged else "It holds no message."
+        raise BagError(f"No complete message could be recovered from {source}. {state}")
+    encodings = {schema.encoding for schema, _, _, _ in found.messages if schema is not None}
+    if encodings != {"ros1msg"}:
+        raise BagError(
+            f"{source} holds messages with {', '.join(sorted(encodings))} schemas; the repair "
+            "writes ROS 1 bags, from MCAP files with ROS 1 (ros1msg) schemas only."
+        )
+    partial = output.with_name(output.name + ".partial")
+    partial.unlink(missing_ok=True)
+    try:
+        _mcap_to_ros1(source, partial, keep_going=True, compression=compression)
+        partial.replace(output)
+    finally:
+        partial.unlink(missing_ok=True)
+    for _, channel, _, _ in found.messages:
+        report.counts[channel.topic] = report.counts.get(channel.topic, 0) + 1
+    times = [log_time for _, _, log_time, _ in found.messages]
+    report.start_ns, report.end_ns = min(times), max(times)
+    return report
 
 
 def _count(number: int, noun: str) -> str:
@@ -245,6 +298,8 @@ def repair_bag(source: PathLike, output: PathLike, compression: str = "none") ->
         raise BagError(why)
     if output.exists():
         raise BagError(f"{output} exists already; choose another name for the repaired bag.")
+    if records.bag_format(source) == "mcap":
+        return _repair_mcap(source, output, compression)
     scan = records.scan(source, check_index=True)
     report = _report(source, output, scan)
     if not scan.messages:

@@ -391,6 +391,11 @@ class Graph(ParameterServer):
         """
         self._clock_listeners.append(listener)
 
+    def remove_clock_listener(self, listener: Callable[[int], None]) -> None:
+        """Stop calling ``listener``; removing one not added does nothing."""
+        if listener in self._clock_listeners:
+            self._clock_listeners.remove(listener)
+
     def _advance_to(self, t_ns: int) -> None:
         if t_ns > self._now_ns:
             for listener in self._clock_listeners:

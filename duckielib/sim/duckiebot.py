@@ -216,6 +216,32 @@ class VirtualDuckiebot:
         """
         return self.graph.run_until(condition, timeout)
 
+    def live(self, port: int = 8765, rate: float = 1.0) -> Any:
+        """Watch the robot live in Foxglove or Lichtblick; the address to open is printed.
+
+        The view serves every topic, the camera, each pose as a frame a 3D panel draws, and
+        the simulated time (see :mod:`duckielib.sim.live`). While it is open, ``run()`` keeps
+        pace with the wall clock (``rate`` 2: twice as fast). Close it with ``close()``.
+
+        Args:
+            port: the port to serve on, on this computer only (127.0.0.1).
+            rate: simulated seconds per wall-clock second.
+
+        Returns:
+            The :class:`~duckielib.sim.live.LiveView`.
+
+        Raises:
+            ConfigError: if the port is taken or the rate is not above 0.
+        """
+        from duckielib.sim.live import LiveView
+
+        view = LiveView(self.graph, port=port, rate=rate, name=f"virtual Duckiebot {self.name}")
+        print(
+            f"Live view at {view.url}: in Foxglove or Lichtblick, open a connection, choose "
+            "Foxglove WebSocket and give this address."
+        )
+        return view
+
     def shutdown(self) -> None:
         """Stop every node: the wheels stop and the LEDs go off, as when the robot shuts down."""
         self.graph.shutdown("the virtual Duckiebot was shut down")

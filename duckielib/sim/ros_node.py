@@ -77,6 +77,7 @@ class Pace:
         max_lag: wall seconds the clock may fall behind and still catch up.
         clock: the wall clock, in seconds (``time.monotonic``).
         sleep: how to wait, in wall seconds (``time.sleep``).
+        start: the simulated time now, in seconds.
     """
 
     def __init__(
@@ -85,12 +86,13 @@ class Pace:
         max_lag: float = _MAX_LAG_S,
         clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
+        start: float = 0.0,
     ) -> None:
         self.rate = rate
         self.max_lag = max_lag
         self._clock = clock
         self._sleep = sleep
-        self._origin = clock()  # the wall time at which simulated time was 0
+        self._origin = clock() - start / rate  # the wall time at which simulated time was 0
 
     def wait(self, t: float) -> None:
         """Wait until simulated time ``t`` (seconds) is due on the wall clock."""

@@ -155,6 +155,7 @@ def run_apart(
     stall_limit: Optional[float] = None,
     launcher: Optional[Launcher] = None,
     wall_limit: Optional[float] = None,
+    live: Optional[Callable[[Any], Any]] = None,
 ) -> Any:
     """:func:`~duckielib.tools.runner.run_mission` with the nodes in a process of their own.
 
@@ -173,7 +174,7 @@ def run_apart(
     arguments = nodes_arguments(chosen.name, stop_color, stall_limit)
     start = functools.partial(_with_arguments, launcher, arguments)
     namespace, simulated, wall, failure = drive_apart(
-        start, chosen, noise, seed, files, time_limit, wall_limit
+        start, chosen, noise, seed, files, time_limit, wall_limit, live
     )
     run = (chosen, namespace, noise, seed, label, files, simulated, wall)
     return finish_run(run, failure, animation, figure)
@@ -323,6 +324,7 @@ def drive_apart(
     files: Dict[str, Path],
     time_limit: float,
     wall_limit: Optional[float] = None,
+    live: Optional[Callable[[Any], Any]] = None,
 ) -> Tuple[str, float, float, Optional[DuckielibError]]:
     """Drive ``chosen`` on a virtual Duckiebot here, with the nodes in another process.
 
@@ -335,6 +337,8 @@ def drive_apart(
         files: where to write the bag (``"bag"``) and the log (``"log"``).
         time_limit: simulated seconds after which an unfinished mission is stopped.
         wall_limit: wall-clock seconds after which the run is stopped (None: no limit).
+        live: as :func:`duckielib.tools.runner.run_mission`'s: given the robot before the
+            mission starts; what it returns is closed at the end.
 
     Returns:
         As :func:`duckielib.tools.runner.drive_and_record`: the robot's namespace, the
@@ -355,12 +359,16 @@ def drive_apart(
     )
     link = wire.RobotLink(robot_end, bot, REPLY_TIMEOUT_S, deadline)
     recorder = BagRecorder(files["bag"], [bot.namespace + name for name in RECORDED], graph=graph)
+    view = None
     try:
+        view = None if live is None else live(bot)
         with start_nodes(nodes_end):
             nodes_end.close()
             ended, crash, unloaded = _follow(link, time_limit, wall_limit)
     finally:
-        bot.shutdown()
+        bot.shutdown()  # what the robot does on the way out is still served
+        if view is not None:
+            view.close()
         recorder.close()
         robot_end.close()
         wall = time.perf_counter() - wall

@@ -185,7 +185,9 @@ def _bag_repair(args: argparse.Namespace) -> int:
 def _bag_convert(args: argparse.Namespace) -> int:
     from duckielib.bags.convert import bag_kind, convert_bag
 
-    target = convert_bag(args.source, args.target, schema=args.schema, storage=args.storage)
+    target = convert_bag(
+        args.source, args.target, schema=args.schema, storage=args.storage, poses_3d=args.poses_3d
+    )
     kind = bag_kind(target)
     said = {
         "ros1": "a ROS 1 bag",
@@ -193,6 +195,8 @@ def _bag_convert(args: argparse.Namespace) -> int:
         "ros2": f"a ROS 2 bag folder ({args.storage})",
     }[kind]
     print(f"Wrote {target}: {said}.")
+    if args.poses_3d:
+        print("Each 2D pose is also a frame on /tf and a PoseStamped on TOPIC_3d, for 3D panels.")
     if kind == "mcap":
         print("Open it in Foxglove, Lichtblick or PlotJuggler 4 (File > Open).")
     return 0
@@ -277,6 +281,7 @@ def _mission(args: argparse.Namespace) -> int:
         animation=not args.no_animation,
         figure=not args.no_figure,
         stall_limit=args.stall_limit,
+        live=_live_view(args.port, args.rate, "mission starts") if args.live else None,
     )
     print(run.text())
     if args.mcap:
@@ -287,9 +292,25 @@ def _mission(args: argparse.Namespace) -> int:
         bag = Path(run.files["bag"])
         mcap = bag.with_suffix(".mcap")
         mcap.unlink(missing_ok=True)  # a previous run's, in the same folder
-        convert_bag(bag, mcap)
-        print(f"wrote {mcap}: the same run as MCAP, for Foxglove, Lichtblick or PlotJuggler 4")
+        convert_bag(bag, mcap, poses_3d=True)
+        print(
+            f"wrote {mcap}: the same run as MCAP, its poses also as frames of a 3D panel, for "
+            "Foxglove, Lichtblick or PlotJuggler 4"
+        )
     return 0
+
+
+def _live_view(port: int, rate: float, starts: str) -> Any:
+    """What ``--live`` gives a run: serve the robot, then wait for a viewer to start."""
+
+    def serve(bot: Any) -> Any:
+        view = bot.live(port=port, rate=rate)
+        print(f"The {starts} when a viewer subscribes to a topic (Ctrl-C to stop).", flush=True)
+        view.wait_for_viewer()
+        print(f"A viewer is watching: driving at {rate:g} x the wall clock's pace.", flush=True)
+        return view
+
+    return serve
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -303,6 +324,7 @@ def _run(args: argparse.Namespace) -> int:
             seed=args.seed,
             seconds=args.seconds,
             out=args.out,
+            live=_live_view(args.port, args.rate, "nodes start") if args.live else None,
         )
     except KeyboardInterrupt as stopped:  # the run's files are written: say what ran
         interrupted = getattr(stopped, "run", None)
@@ -341,7 +363,31 @@ def _add_run(commands: argparse._SubParsersAction) -> None:
         help="simulated seconds to run at most (default 30)",
     )
     run.add_argument("--out", default="runs/project", help="folder for the bag, log, summary")
+    _add_live_options(run)
     run.set_defaults(handler=_run)
+
+
+def _add_live_options(command: argparse.ArgumentParser) -> None:
+    """``--live``, ``--port`` and ``--rate``: watch a run in Foxglove or Lichtblick."""
+    command.add_argument(
+        "--live",
+        action="store_true",
+        help="serve the run to Foxglove or Lichtblick as it goes (every topic, the camera, "
+        "the poses as frames of a 3D panel), at the wall clock's pace; it starts when a "
+        "viewer subscribes",
+    )
+    command.add_argument(
+        "--port",
+        type=_port,
+        default=8765,
+        help="with --live: the port to serve on, on this computer only (default 8765)",
+    )
+    command.add_argument(
+        "--rate",
+        type=_rate,
+        default=1.0,
+        help="with --live: simulated seconds per wall-clock second (default 1)",
+    )
 
 
 def _robot_prepare(args: argparse.Namespace) -> int:
@@ -408,6 +454,7 @@ def _add_mission(commands: argparse._SubParsersAction) -> None:
         help="also write the run as mission.mcap (ROS 1 schemas, every message), which "
         "Foxglove, Lichtblick and PlotJuggler 4 open",
     )
+    _add_live_options(mission)
     mission.add_argument(
         "--stall-limit",
         type=_seconds,
@@ -633,15 +680,34 @@ def _seed(text: str) -> int:
     return value
 
 
-def _seconds(text: str) -> float:
-    """A duration from the command line: a number of seconds above 0."""
+def _above_zero(text: str, what: str) -> float:
+    """A finite number above 0 from the command line, or a sentence saying ``what`` it is."""
     try:
         value = float(text)
     except ValueError:
         value = math.nan
     if not value > 0 or math.isinf(value):
-        raise argparse.ArgumentTypeError(f"give a number of seconds above 0, not {text!r}")
+        raise argparse.ArgumentTypeError(f"give {what}, not {text!r}")
     return value
+
+
+def _seconds(text: str) -> float:
+    """A duration from the command line: a number of seconds above 0."""
+    return _above_zero(text, "a number of seconds above 0")
+
+
+def _rate(text: str) -> float:
+    """A pace from the command line: simulated seconds per wall second, above 0."""
+    return _above_zero(text, "simulated seconds per wall-clock second, a number above 0")
+
+
+def _port(text: str) -> int:
+    """A TCP port from the command line: 1 to 65535, or 0 for any free one."""
+    if not text.isdigit() or int(text) > 65535:
+        raise argparse.ArgumentTypeError(
+            f"give a port from 1 to 65535 (0: any free one), not {text!r}"
+        )
+    return int(text)
 
 
 def _finite(text: str) -> float:
@@ -706,6 +772,12 @@ def _add_bag_writers(bag_commands: argparse._SubParsersAction) -> None:
         choices=("mcap", "sqlite3"),
         default="mcap",
         help="a ROS 2 bag folder's storage (default mcap)",
+    )
+    convert.add_argument(
+        "--poses-3d",
+        action="store_true",
+        help="also write each 2D pose (duckietown_msgs/Pose2DStamped) as a frame on /tf and a "
+        "geometry_msgs/PoseStamped on TOPIC_3d, which 3D panels draw",
     )
     convert.set_defaults(handler=_bag_convert)
 

@@ -35,7 +35,7 @@ import time
 import traceback
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional, Tuple, Union
 
 from duckielib.errors import ConfigError, DuckielibError
 from duckielib.missions import Mission, mission_named
@@ -282,6 +282,7 @@ def run_mission(
     time_limit: float = DEFAULT_TIME_LIMIT_S,
     figure: bool = True,
     stall_limit: Optional[float] = None,
+    live: Optional[Callable[[Any], Any]] = None,
 ) -> MissionRun:
     """Run ``mission`` on the virtual Duckiebot with ``solution`` and write its files to ``out``.
 
@@ -303,6 +304,9 @@ def run_mission(
         figure: whether to draw ``trajectory.png`` (the grader draws its own, from the bag).
         stall_limit: real seconds a node's code may run without calling rospy before the
             mission stops it (simulated time cannot move meanwhile); None: the graph's 10 s.
+        live: to watch the run as it goes, a function given the virtual Duckiebot before the
+            mission starts; what it returns is closed at the end (``lambda bot: bot.live()``
+            serves the run to Foxglove or Lichtblick).
 
     Returns:
         The run: its report, summary and files.
@@ -322,7 +326,7 @@ def run_mission(
     files = run_files(Path(out))
     with modules_installed(replace_real=True):
         namespace, simulated, wall, failure = drive_and_record(
-            parts, chosen, noise, seed, files, time_limit, stall_limit
+            parts, chosen, noise, seed, files, time_limit, stall_limit, live
         )
     run = (chosen, namespace, noise, seed, label, files, simulated, wall)
     return finish_run(run, failure, animation, figure)
@@ -432,6 +436,7 @@ def drive_and_record(
     files: Dict[str, Path],
     time_limit: float,
     stall_limit: Optional[float] = None,
+    live: Optional[Callable[[Any], Any]] = None,
 ) -> Tuple[str, float, float, Optional[DuckielibError]]:
     """Run the mission's nodes on a new virtual Duckiebot, recording the bag and the log.
 
@@ -469,7 +474,9 @@ def drive_and_record(
     recorder = BagRecorder(files["bag"], topics, graph=graph)
     crash: Optional[Tuple[type, str]] = None
     wall = time.perf_counter()
+    view = None
     try:
+        view = None if live is None else live(bot)
         ended = bot.run_until(lambda: bool(finished), time_limit)
         # Once the node has returned, watch the robot a while: wheels it left turning show in
         # the bag (the report checks that the robot stands still after 'done').
@@ -478,7 +485,9 @@ def drive_and_record(
     except NodeCrashed as error:
         crash, ended = node_crash(error), False
     finally:
-        bot.shutdown()
+        bot.shutdown()  # what the robot does on the way out is still served
+        if view is not None:
+            view.close()
         recorder.close()
         wall = time.perf_counter() - wall
         simulated = bot.time

@@ -5,12 +5,12 @@ from __future__ import annotations
 import inspect
 import io
 
-from duckielib.bags.recorder import _Recording
+from duckielib.bags.recorder import Tap
 from duckielib.messages import String
 from duckielib.ros import Graph, rospy
 from duckielib.ros.context import node_context
 
-WHERE = "the bag recorder (_Recording in duckielib/bags/recorder.py)"
+WHERE = "the bag recorder and the live view (Tap in duckielib/bags/recorder.py)"
 
 
 def _shape(signature):
@@ -43,14 +43,14 @@ def test_rospy_subscriber_has_the_enqueue_method_the_recorder_overrides():
         f"duckielib.ros.rospy.Subscriber._enqueue is now {inspect.signature(base)}, but {WHERE} "
         "overrides it as (self, data: bytes) -> None; make the two agree."
     )
-    assert _shape(inspect.signature(_Recording._enqueue)) == expected
+    assert _shape(inspect.signature(Tap._enqueue)) == expected
 
 
 def test_rospy_calls_enqueue_with_the_bytes_and_sets_record_first():
     graph = Graph(stdout=io.StringIO(), stderr=io.StringIO())
     received = []
 
-    class Tap(rospy.Subscriber):
+    class Probe(rospy.Subscriber):
         def _enqueue(self, data):
             received.append((data, self._record))
 
@@ -60,13 +60,13 @@ def test_rospy_calls_enqueue_with_the_bytes_and_sets_record_first():
             latched.publish(String("kept"))
             live = rospy.Publisher("/live", String, queue_size=1)
         with node_context(graph.host_node("listener")):
-            old = Tap("/latched", rospy.AnyMsg)
+            old = Probe("/latched", rospy.AnyMsg)
             assert received == [(String("kept").to_bytes(), old._record)], (
                 f"rospy no longer gives a latched message to Subscriber._enqueue while "
                 f"subscribing, with _record set, as {WHERE} expects."
             )
             received.clear()
-            tap = Tap("/live", rospy.AnyMsg)
+            tap = Probe("/live", rospy.AnyMsg)
         live.publish(String("now"))
         assert received == [(String("now").to_bytes(), tap._record)], (
             f"rospy's publish() no longer calls Subscriber._enqueue with the message's bytes, "
@@ -79,5 +79,26 @@ def test_rospy_calls_enqueue_with_the_bytes_and_sets_record_first():
         assert tap._record is None, (
             f"Subscriber._record is no longer None once unsubscribed, as {WHERE} expects."
         )
+    finally:
+        graph.shutdown()
+
+
+def test_a_tap_hands_each_message_bytes_and_topic_record_latched_first():
+    graph = Graph(stdout=io.StringIO(), stderr=io.StringIO())
+    taken = []
+    try:
+        with node_context(graph.host_node("talker")):
+            talker = rospy.Publisher("/chatter", String, latch=True, queue_size=1)
+            talker.publish(String("first"))
+        with node_context(graph.host_node("tap")):
+            tap = Tap("/chatter", lambda record, data: taken.append((record.name, data)))
+        talker.publish(String("second"))
+        assert taken == [
+            ("/chatter", String("first").to_bytes()),
+            ("/chatter", String("second").to_bytes()),
+        ]
+        tap.unregister()
+        talker.publish(String("third"))
+        assert len(taken) == 2
     finally:
         graph.shutdown()

@@ -222,6 +222,7 @@ def run_project(
     seed: int = 0,
     seconds: float = 30.0,
     out: PathLike = "runs/project",
+    live: Optional[Callable[[Any], Any]] = None,
 ) -> ProjectRun:
     """Run a Duckietown project's nodes on the virtual Duckiebot for ``seconds``.
 
@@ -234,6 +235,10 @@ def run_project(
     A node that fails (raises, or exits with a status other than 0) is said in the run's
     ``failures``, with the project's file and line, and the others run on, as roslaunch lets
     them; a ``required`` node's failure ends the run.
+
+    ``live``, to watch the run as it goes, is given the virtual Duckiebot before the nodes
+    start; what it returns is closed at the end (``lambda bot: bot.live()`` serves the run to
+    Foxglove or Lichtblick, the camera and the ``cv2`` windows included).
 
     Raises:
         ProjectError: for a project, launcher or launch file that cannot be run (the file and
@@ -267,7 +272,9 @@ def run_project(
         graph.topic_watchers.append(_recording_new_topics(recorder))
         failures: List[str] = []
         interrupt: Optional[KeyboardInterrupt] = None
+        view = None
         try:
+            view = None if live is None else live(bot)
             _drive(
                 bot, stages, seconds, lambda error: failures.append(_crash_said(error, workspace))
             )
@@ -276,6 +283,8 @@ def run_project(
         finally:
             at_end = {**_waiting(graph), **ended}
             bot.shutdown()
+            if view is not None:
+                view.close()
             recorder.close()
             files["log"].write_text(
                 "\n".join(repr(record) for record in graph.log) + "\n", encoding="utf-8"
