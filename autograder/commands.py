@@ -116,15 +116,33 @@ def _feedback(args: argparse.Namespace) -> int:
     import warnings
     from pathlib import Path
 
+    from autograder.course import CourseError
     from autograder.grade import write_grades
 
     warnings.filterwarnings("ignore", module="nbgrader")
+    if args.export and args.export[0].lower() not in ("canvas", "moodle"):
+        raise CourseError(f"--export takes canvas or moodle, not {args.export[0]!r}.")
+    if args.export and not args.roster:
+        raise CourseError(
+            "--export needs --roster ROSTER.csv: the class list the LMS knows your students by "
+            "(for Canvas, its gradebook export)."
+        )
     results = write_grades(Path(args.out))
     waiting = sum(len(result.to_grade) for result in results)
     print(
         f"wrote {Path(args.out) / 'grades.csv'} and {len(results)} feedback pages in "
         f"{Path(args.out) / 'feedback'}/; {waiting} answers still wait for a grade."
     )
+    if args.export:
+        from autograder.course import assignments
+        from autograder.lms import export_grades
+
+        kind, target = args.export
+        export = export_grades(
+            results, assignments(), Path(args.roster), kind.lower(), Path(target)
+        )
+        print(export.text())
+        return 1 if export.unmatched else 0
     return 0
 
 
@@ -193,6 +211,18 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
         "given in Formgrader (runs nothing)",
     )
     feedback.add_argument("out", help="the folder `duckie grade --out` wrote")
+    feedback.add_argument(
+        "--export",
+        nargs=2,
+        metavar=("LMS", "FILE"),
+        help="also write FILE, the gradebook import of LMS (canvas or moodle): each "
+        "assignment's points and the driving score, by student",
+    )
+    feedback.add_argument(
+        "--roster",
+        help="with --export: the class list, a CSV with a login or email column (for Canvas, "
+        "its gradebook export; for Moodle, its participants list)",
+    )
     feedback.set_defaults(handler=_feedback)
     edition = commands.add_parser(
         "student-edition",

@@ -85,6 +85,20 @@ def test_an_answer_in_words_waits_for_a_person_and_keeps_their_grade(sandbox, tm
         assert grade.needs_manual_grade  # nbgrader's rule: a person's grade is to be reviewed
     assert rows(out)["ada"][f"{ASSIGNMENT}:{ANSWER}"] == "1.5"
 
+    # The grades go out to the LMS, the person's grade in the assignment's points.
+    roster = tmp_path / "participants.csv"
+    roster.write_text("Username,Email address\nalovelace,ada@uni.example\n", encoding="utf-8")
+    target = tmp_path / "moodle.csv"
+    exported = duckie(
+        "feedback", str(out), "--export", "moodle", str(target), "--roster", str(roster)
+    )
+    assert exported.returncode == 0, exported.stderr
+    assert f"wrote {target}: 1 students' grades for Moodle" in exported.stdout
+    header, ada = target.read_text().splitlines()
+    columns = dict(zip(header.split(","), ada.split(",")))
+    assert columns["Email address"] == "ada@uni.example"
+    assert columns[ASSIGNMENT] == "10.5"
+
 
 @pytest.mark.parametrize(
     ("command", "said"),
