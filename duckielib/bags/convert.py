@@ -31,7 +31,7 @@ import shutil
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Dict, Iterator, List, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Set, Tuple
 
 from duckielib.bags import records
 from duckielib.bags.io import TO_ROS1, Bag, BagWriter, PathLike
@@ -227,10 +227,9 @@ def _mcap_encodings(path: Path) -> set:
         if summary is not None:
             return {schema.encoding for schema in summary.schemas.values()}
     scan = scan_mcap(path)
-    found = {schema.encoding for schema, _, _, _ in scan.messages if schema is not None}
-    if not found:
+    if not scan.encodings:
         raise BagError(scan.sentence(path) if scan.damages else f"{path} holds no message.")
-    return found
+    return scan.encodings
 
 
 def _ros1_to_mcap(bag: Bag, out: Path, poses_3d: bool = False) -> None:
@@ -289,19 +288,36 @@ class McapScan:
     """What a record-by-record reading of an MCAP file found.
 
     Attributes:
-        messages: ``(schema, channel, log time in ns, bytes)`` of every message that could be
-            read, in file order.
+        counts: how many messages could be read, by topic.
+        encodings: the schema encodings of those messages (``ros1msg``, ``ros2msg``...).
+        start_ns, end_ns: the first and last record time read (0 when none was).
         damages: where the file is damaged, a sentence each (empty for a sound file).
         lost: messages the damage cost, by topic, where the file's own index says.
         listed: how many messages the file's summary lists (0 without a summary).
         summarised: whether the file has its summary (it was closed properly).
     """
 
-    messages: List[Tuple[Any, Any, int, bytes]] = field(default_factory=list)
+    counts: Dict[str, int] = field(default_factory=dict)
+    encodings: Set[str] = field(default_factory=set)
+    start_ns: int = 0
+    end_ns: int = 0
     damages: List[str] = field(default_factory=list)
     lost: Dict[str, int] = field(default_factory=dict)
     listed: int = 0
     summarised: bool = False
+
+    @property
+    def count(self) -> int:
+        """How many messages could be read."""
+        return sum(self.counts.values())
+
+    def took(self, schema: Any, channel: Any, log_time: int) -> None:
+        """Count one message read."""
+        self.counts[channel.topic] = self.counts.get(channel.topic, 0) + 1
+        if schema is not None:
+            self.encodings.add(schema.encoding)
+        self.start_ns = log_time if self.count == 1 else min(self.start_ns, log_time)
+        self.end_ns = max(self.end_ns, log_time)
 
     def sentence(self, path: Path) -> str:
         """The damage in a sentence: where, and how many messages of which topics it costs."""
@@ -314,25 +330,32 @@ class McapScan:
         return said + "."
 
 
-def scan_mcap(path: Path) -> McapScan:
+#: What a scan hands each message it reads: ``take(schema, channel, log time in ns, bytes)``.
+Take = Callable[[Any, Any, int, bytes], None]
+
+
+def scan_mcap(path: Path, take: Optional[Take] = None) -> McapScan:
     """Read every message of an MCAP file that can be read, checking each chunk's CRC.
 
     With its summary (a file closed properly), each chunk is read on its own, so a damaged
     chunk costs only its own messages, which the file's message index counts. Without one
-    (cut short, never closed), the file is read from its start up to the damage.
+    (cut short, never closed), the file is read from its start up to the damage. Each message
+    goes to ``take`` as it is read (a whole chunk at a time), in file order: nothing but one
+    chunk is held in memory.
     """
     from mcap.reader import make_reader
 
     scan = McapScan()
+    give: Take = take or (lambda schema, channel, log_time, data: None)
     with path.open("rb") as file:
         try:
             summary = make_reader(file, validate_crcs=True).get_summary()
         except Exception:  # a damaged end: read from the start instead
             summary = None
         if summary is None or not summary.chunk_indexes:
-            _scan_stream(file, path, scan, summary)
+            _scan_stream(file, scan, summary, give)
         else:
-            _scan_chunks(file, scan, summary)
+            _scan_chunks(file, scan, summary, give)
     return scan
 
 
@@ -358,7 +381,7 @@ def _records(data: bytes) -> Iterator[Any]:
             raise
 
 
-def _scan_chunks(file: Any, scan: McapScan, summary: Any) -> None:
+def _scan_chunks(file: Any, scan: McapScan, summary: Any, take: Take) -> None:
     from mcap.records import Message, MessageIndex
 
     scan.summarised = True
@@ -387,10 +410,12 @@ def _scan_chunks(file: Any, scan: McapScan, summary: Any) -> None:
                         topic = channels[record.channel_id].topic
                         scan.lost[topic] = scan.lost.get(topic, 0) + len(record.records)
             continue
-        scan.messages += [(schema, channel, r.log_time, r.data) for schema, channel, r in found]
+        for schema, channel, record in found:
+            scan.took(schema, channel, record.log_time)
+            take(schema, channel, record.log_time, record.data)
 
 
-def _scan_stream(file: Any, path: Path, scan: McapScan, summary: Any) -> None:
+def _scan_stream(file: Any, scan: McapScan, summary: Any, take: Take) -> None:
     from mcap.records import Channel, Message, Schema
     from mcap.stream_reader import StreamReader
 
@@ -406,9 +431,9 @@ def _scan_stream(file: Any, path: Path, scan: McapScan, summary: Any) -> None:
                 channels[record.id] = record
             elif isinstance(record, Message) and record.channel_id in channels:
                 channel = channels[record.channel_id]
-                scan.messages.append(
-                    (schemas.get(channel.schema_id), channel, record.log_time, record.data)
-                )
+                schema = schemas.get(channel.schema_id)
+                scan.took(schema, channel, record.log_time)
+                take(schema, channel, record.log_time, record.data)
                 last = record.log_time
     except Exception as error:
         after = "" if last is None else f" (after the message recorded at {last / NS_PER_S:.3f} s)"
@@ -439,24 +464,34 @@ def _mcap_to_ros1(
             than refuse it.
         compression: the bag's compression, ``"none"`` or ``"bz2"``.
 
+    Returns:
+        What the scan found (the messages written, and the damage).
+
     Raises:
-        BagError: if the file is damaged (and not ``keep_going``), or a channel has no schema.
+        BagError: if the file is damaged (and not ``keep_going``: what was written is then
+            incomplete), a channel has no schema, or a schema is not ROS 1's.
     """
-    scan = scan_mcap(source)
-    if scan.damages and not keep_going:
-        readable = len(scan.messages)
-        raise BagError(
-            f"{scan.sentence(source)} `duckie bag repair {source} NEW.bag` recovers the "
-            f"{readable} messages that can be read."
-        )
     md5sums: Dict[int, str] = {}
     with BagWriter(out, compression) as writer:
-        for schema, channel, log_time, data in scan.messages:
+
+        def write(schema: Any, channel: Any, log_time: int, data: bytes) -> None:
             if schema is None:
                 raise BagError(f"{source}: the channel {channel.topic} has no schema.")
+            if schema.encoding != "ros1msg":
+                raise BagError(
+                    f"{source} holds messages with {schema.encoding} schemas; a ROS 1 bag is "
+                    "written from MCAP files with ROS 1 (ros1msg) schemas only."
+                )
             md5 = md5sums.get(schema.id) or channel.metadata.get("md5sum") or _md5(schema)
             md5sums[schema.id] = md5
             writer.write_raw(channel.topic, schema.name, md5, schema.data.decode(), log_time, data)
+
+        scan = scan_mcap(source, write)
+    if scan.damages and not keep_going:
+        raise BagError(
+            f"{scan.sentence(source)} `duckie bag repair {source} NEW.bag` recovers the "
+            f"{scan.count} messages that can be read."
+        )
     return scan
 
 

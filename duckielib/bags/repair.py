@@ -199,32 +199,23 @@ def _repair_mcap(source: Path, output: Path, compression: str) -> RepairReport:
     damaged chunk costs only its own messages; a file without its summary is read from its
     start up to its damage.
     """
-    from duckielib.bags.convert import _mcap_to_ros1, scan_mcap
+    from duckielib.bags.convert import _mcap_to_ros1
 
-    found = scan_mcap(source)
-    report = RepairReport(source, output, was_indexed=found.summarised, format="mcap")
-    report.damages = list(found.damages)
-    report.listed, report.found = found.listed, len(found.messages)
-    if not found.messages:
-        state = " ".join(report.state()) if report.damaged else "It holds no message."
-        raise BagError(f"No complete message could be recovered from {source}. {state}")
-    encodings = {schema.encoding for schema, _, _, _ in found.messages if schema is not None}
-    if encodings != {"ros1msg"}:
-        raise BagError(
-            f"{source} holds messages with {', '.join(sorted(encodings))} schemas; the repair "
-            "writes ROS 1 bags, from MCAP files with ROS 1 (ros1msg) schemas only."
-        )
     partial = output.with_name(output.name + ".partial")
     partial.unlink(missing_ok=True)
     try:
-        _mcap_to_ros1(source, partial, keep_going=True, compression=compression)
+        found = _mcap_to_ros1(source, partial, keep_going=True, compression=compression)
+        report = RepairReport(source, output, was_indexed=found.summarised, format="mcap")
+        report.damages = list(found.damages)
+        report.listed, report.found = found.listed, found.count
+        if not found.count:
+            state = " ".join(report.state()) if report.damaged else "It holds no message."
+            raise BagError(f"No complete message could be recovered from {source}. {state}")
         partial.replace(output)
     finally:
         partial.unlink(missing_ok=True)
-    for _, channel, _, _ in found.messages:
-        report.counts[channel.topic] = report.counts.get(channel.topic, 0) + 1
-    times = [log_time for _, _, log_time, _ in found.messages]
-    report.start_ns, report.end_ns = min(times), max(times)
+    report.counts = dict(found.counts)
+    report.start_ns, report.end_ns = found.start_ns, found.end_ns
     return report
 
 

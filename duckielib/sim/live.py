@@ -71,17 +71,17 @@ _numbers = itertools.count(1)
 
 
 class _Viewers(ServerListener):
-    """The Foxglove server's listener: which image topics viewers subscribe to, and whether any."""
+    """The Foxglove server's listener: which topics viewers subscribe to, and whether any."""
 
     def __init__(self) -> None:
         self.lock = threading.Lock()
-        self.images: Dict[str, int] = {}  # topic -> subscriptions
+        self.subscriptions: Dict[str, int] = {}  # by topic
         self.new: List[str] = []  # topics subscribed to since the graph last looked
         self.subscribed = threading.Event()
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
         with self.lock:
-            self.images[channel.topic] = self.images.get(channel.topic, 0) + 1
+            self.subscriptions[channel.topic] = self.subscriptions.get(channel.topic, 0) + 1
             self.new.append(channel.topic)
         self.subscribed.set()
 
@@ -92,11 +92,11 @@ class _Viewers(ServerListener):
 
     def on_unsubscribe(self, client: Any, channel: Any) -> None:
         with self.lock:
-            self.images[channel.topic] = max(0, self.images.get(channel.topic, 0) - 1)
+            self.subscriptions[channel.topic] = max(0, self.subscriptions.get(channel.topic, 0) - 1)
 
     def watching(self, topic: str) -> bool:
         with self.lock:
-            return self.images.get(topic, 0) > 0
+            return self.subscriptions.get(topic, 0) > 0
 
 
 class LiveView:
