@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+from typing import Any
 
 from duckielib.errors import DuckielibError
 
@@ -156,6 +157,98 @@ def _student_edition(args: argparse.Namespace) -> int:
     return 0
 
 
+def _hub_users(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    if args.roster is None and not args.instructor:
+        raise DuckielibError("Give a roster, an --instructor, or both.")
+    roster = Path(args.roster) if args.roster else None
+    created = hubs.create_accounts(
+        hub, roster, args.instructor or [], progress=lambda line: print(line, flush=True)
+    )
+    print(
+        f"{len(hub.students)} students and {len(hub.instructors)} instructors may log in to "
+        f"the hub in {hub.root}."
+    )
+    if created:
+        print(
+            f"The first passwords of the {len(created)} new accounts: "
+            f"{hub.root / 'passwords.csv'} (readable by root only)."
+        )
+    return 0
+
+
+def _hub_start(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
+    hubs.prepare(
+        hub,
+        port=args.port,
+        ip=args.ip,
+        python=args.python,
+        progress=lambda line: print(line, flush=True),
+    )
+    command = hubs.hub_command(hub)
+    print(
+        f"the hub: http://{args.ip}:{args.port}/ (Ctrl-C stops it); Formgrader, for "
+        f"instructors: http://{args.ip}:{args.port}/services/formgrader/"
+    )
+    if args.prepare_only:
+        print(f"prepared; start it with: cd {hub.state} && {' '.join(command)}")
+        return 0
+    sys.stdout.flush()
+    os.chdir(hub.state)
+    os.execv(command[0], command)
+    return 0  # not reached: the hub runs in this process
+
+
+def _hub_exchange(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    if args.hub_command == "release":
+        notebooks = hubs.release(hub, args.assignment, due=args.due)
+        print(
+            f"released {args.assignment} ({', '.join(notebooks)}): students fetch it in their "
+            "Assignment List."
+        )
+        return 0
+    if args.hub_command == "collect":
+        students = hubs.collect(hub, args.assignment, before_due=args.before_due)
+        submitted = hub.course / "submitted"
+        missing = sorted(set(hub.students) - set(students))
+        none = f"; none from {', '.join(missing)}" if missing else ""
+        print(f"{len(students)} submissions of {args.assignment} are in {submitted}{none}.")
+        print(
+            f"grade them with: duckie grade {submitted} --out {hub.grading} "
+            f"--assignment {args.assignment}"
+        )
+        return 0
+    grading = Path(args.grading) if args.grading else None
+    returned = hubs.return_feedback(hub, args.assignment, grading)
+    print(
+        f"feedback on {args.assignment} returned to {len(returned.returned)} students: they "
+        "fetch it in their Assignment List."
+    )
+    if returned.not_graded:
+        print(
+            f"not graded yet, so nothing returned to: {', '.join(returned.not_graded)} (run "
+            f"duckie grade, then duckie feedback {grading or hub.grading})."
+        )
+        return 1
+    return 0
+
+
+def _hub(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from autograder import hub as hubs
+
+    hub = hubs.Hub.load(Path(args.hub))
+    if args.hub_command == "users":
+        return _hub_users(hubs, hub, args)
+    if args.hub_command == "start":
+        return _hub_start(hubs, hub, args)
+    return _hub_exchange(hubs, hub, args)
+
+
 def add_commands(commands: argparse._SubParsersAction) -> None:
     """Add the instructors' commands: release, grade, formgrade, feedback, student-edition."""
     release = commands.add_parser(
@@ -224,6 +317,54 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
         "its gradebook export; for Moodle, its participants list)",
     )
     feedback.set_defaults(handler=_feedback)
+    hub = commands.add_parser(
+        "hub",
+        help="a class hub on this machine: JupyterHub with nbgrader's exchange (as root)",
+    )
+    hub_commands = hub.add_subparsers(dest="hub_command", required=True, metavar="COMMAND")
+    place = argparse.ArgumentParser(add_help=False)
+    place.add_argument(
+        "--hub", default="/srv/duckiebot-hub", help="the hub's folder (/srv/duckiebot-hub)"
+    )
+    users = hub_commands.add_parser(
+        "users",
+        parents=[place],
+        help="a Unix account for each student of a roster (and each --instructor)",
+    )
+    users.add_argument(
+        "roster", nargs="?", help="a CSV with a login or an email column, one row per student"
+    )
+    users.add_argument("--instructor", action="append", help="an instructor's account (repeatable)")
+    start = hub_commands.add_parser(
+        "start", parents=[place], help="install what the hub needs, then run it"
+    )
+    start.add_argument("--port", type=int, default=8000, help="the hub's port (8000)")
+    start.add_argument(
+        "--ip", default="127.0.0.1", help="the address to serve on (0.0.0.0: every network)"
+    )
+    start.add_argument("--python", help="the Python 3.11+ the students' environment is made with")
+    start.add_argument(
+        "--prepare-only", action="store_true", help="install and configure, do not run"
+    )
+    for name, text in (
+        ("release", "put course/ASSIGNMENT into the exchange for students to fetch"),
+        ("collect", "gather the latest submissions of ASSIGNMENT for grading"),
+        ("return", "hand each student their feedback page on ASSIGNMENT"),
+    ):
+        command = hub_commands.add_parser(name, parents=[place], help=text)
+        command.add_argument("assignment", help="an assignment of course/ (05_odometry)")
+    hub_commands.choices["release"].add_argument(
+        "--due", help="its due date, as nbgrader reads it ('2026-12-01 17:00 Europe/Zurich')"
+    )
+    hub_commands.choices["collect"].add_argument(
+        "--before-due",
+        action="store_true",
+        help="each student's last submission before the due date, not their latest",
+    )
+    hub_commands.choices["return"].add_argument(
+        "--grading", help="where duckie grade wrote the grades (HUB/grading)"
+    )
+    hub.set_defaults(handler=_hub)
     edition = commands.add_parser(
         "student-edition",
         help="write what students receive (course/, the library, robot_nodes/; nothing of "

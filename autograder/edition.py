@@ -73,8 +73,9 @@ MARKER_LINE = re.compile(r'^[ \t]*"?### (BEGIN|END) (SOLUTION|HIDDEN TESTS)', re
 RUN_COMMAND = "duckie mission --solution course --out runs/latest"
 
 #: Dependencies of the repository that only instructors and the project's tests use: Dask
-#: grades a class, pytest runs the project's tests.
-INSTRUCTOR_DEPENDENCIES = ("dask", "pytest")
+#: grades a class, JupyterHub serves one (a hub installs it beside the edition), pytest runs
+#: the project's tests.
+INSTRUCTOR_DEPENDENCIES = ("dask", "jupyterhub", "pytest")
 
 #: Debian packages ``make ros`` installs for the grader's sandbox and the browser tests only.
 INSTRUCTOR_PACKAGES = ("bubblewrap", "chromium")

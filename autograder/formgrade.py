@@ -24,7 +24,7 @@ from typing import Dict, Iterable, List, Mapping, Sequence, Tuple
 
 from autograder.course import ROOT, CourseError
 
-__all__ = ["RUBRIC_TAG", "command", "for_formgrader", "prepare", "rubrics"]
+__all__ = ["RUBRIC_TAG", "command", "for_formgrader", "prepare", "rubrics", "write_config"]
 
 #: The tag of the cell that holds an answer's rubric in the notebooks Formgrader shows.
 RUBRIC_TAG = "rubric"
@@ -57,9 +57,14 @@ def prepare(out: Path, source: Path = ROOT / "solutions") -> Path:
             f"{out} has no gradebook: grade the class first with "
             f"`duckie grade SUBMISSIONS --out {out}`."
         )
+    return write_config(work, source)
+
+
+def write_config(work: Path, source: Path = ROOT / "solutions") -> Path:
+    """Write ``work/nbgrader_config.py``: Formgrader on the gradebook ``work`` holds or will."""
     (work / "submitted").mkdir(exist_ok=True)
     text = _CONFIG.format(
-        root=str(work), source=str(Path(source).resolve()), db=f"sqlite:///{database}"
+        root=str(work), source=str(Path(source).resolve()), db=f"sqlite:///{work / 'gradebook.db'}"
     )
     (work / "nbgrader_config.py").write_text(text, encoding="utf-8")
     return work

@@ -1,0 +1,484 @@
+"""A class on the hub, in Chromium: the students fetch, work and submit in their JupyterLab, the
+instructor collects, grades and returns, and each student reads their own feedback, not another's.
+
+Everything is real: JupyterHub with the machine's accounts (PAM; ``duckie hub users`` makes
+them from a Canvas roster), configurable-http-proxy from npm, each student's JupyterLab running
+as their Unix user from the students' Python that ``duckie hub start`` installs, nbgrader's
+exchange, the sandboxed grader and Formgrader as a hub service. The accounts and the hub's
+folder are removed afterwards. Making accounts and switching users needs root.
+"""
+
+from __future__ import annotations
+
+import csv
+import datetime
+import io
+import json
+import os
+import secrets
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Dict
+
+import pytest
+
+from autograder.course import ROOT
+from autograder.hub import HubError, account_name, readable_by_others, roster_accounts
+
+DUCKIE = str(Path(sys.executable).parent / "duckie")
+ASSIGNMENT = "02_ros_concepts"
+NOTEBOOK = f"{ASSIGNMENT}/{ASSIGNMENT}.ipynb"
+
+#: What the students type: ada's first try and bo's only one are wrong (the name is not built
+#: from the robot's), ada's second is right.
+WRONG = """import os
+
+
+def robot_topic(relative_name):
+    return relative_name
+"""
+RIGHT = """import os
+
+
+def robot_topic(relative_name):
+    return "/" + os.environ["VEHICLE_NAME"] + "/" + relative_name
+"""
+ANSWERS = {
+    "ada": "I listed the topics and kept /duckiebot/wheels_driver_node/wheels_cmd (ada).",
+    "bo": "The command topic is /duckiebot/car_cmd_switch_node/cmd (bo).",
+}
+COMMENT = "Right topic; show the printout that found it."
+
+as_root = pytest.mark.skipif(
+    os.geteuid() != 0,
+    reason="the hub makes Unix accounts and runs each student's server as them: run as root",
+)
+
+
+# -- the parts that need no hub -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("key", "name"),
+    [("ada", "ada"), ("Ada.Lovelace@uni.edu", "ada_lovelace"), ("b-o_2", "b-o_2")],
+)
+def test_a_roster_login_or_email_becomes_an_account_name(key, name):
+    assert account_name(key) == name
+
+
+@pytest.mark.parametrize("key", ["Ada Lovelace", "2ada", "x" * 33, "élodie"])
+def test_a_name_that_cannot_be_an_account_is_said_with_what_to_change(key):
+    with pytest.raises(HubError, match="cannot be a Unix account name: use a login"):
+        account_name(key)
+
+
+def test_a_roster_gives_each_student_one_account_and_refuses_two_sharing_one(tmp_path):
+    roster = tmp_path / "roster.csv"
+    roster.write_text(
+        "\ufeffStudent,ID,SIS User ID,SIS Login ID,Section\n"
+        "    Points Possible,,,,\n"
+        "Ada,1,s1,ada,A\nBo,2,s2,bo,A\n",
+        encoding="utf-8",
+    )
+    assert roster_accounts(roster) == ["ada", "bo"]
+    roster.write_text("Email address\nada@uni.edu\nADA@other.edu\n", encoding="utf-8")
+    with pytest.raises(HubError, match=r"would share the account 'ada' \(row 3\)"):
+        roster_accounts(roster)
+
+
+def test_readable_by_others_looks_at_every_folder_above(tmp_path):
+    inner = tmp_path / "a" / "b"
+    inner.mkdir(parents=True)
+    inner.chmod(0o755)
+    (tmp_path / "a").chmod(0o755)
+    tmp_path.chmod(0o755)
+    opened = all(folder.stat().st_mode & 0o001 for folder in tmp_path.parents)
+    assert readable_by_others(inner) is opened
+    (tmp_path / "a").chmod(0o750)
+    assert readable_by_others(inner) is False
+    (tmp_path / "a").chmod(0o755)
+    inner.chmod(0o711)
+    assert readable_by_others(inner) is False
+
+
+# -- a class on a real hub ----------------------------------------------------------------------
+
+
+def _free_ports(count: int) -> int:
+    """A first port of ``count`` consecutive free ones."""
+    for _ in range(200):
+        first = 20000 + secrets.randbelow(20000)
+        try:
+            for port in range(first, first + count):
+                with socket.socket() as probe:
+                    probe.bind(("127.0.0.1", port))
+        except OSError:
+            continue
+        return first
+    raise RuntimeError("no free ports")
+
+
+def _run(*argv: str, check: bool = True) -> subprocess.CompletedProcess:
+    done = subprocess.run(argv, capture_output=True, text=True, check=False, timeout=900)
+    if check and done.returncode != 0:
+        raise AssertionError(
+            f"{' '.join(argv)} exited {done.returncode}:\n{done.stdout}{done.stderr}"
+        )
+    return done
+
+
+def _as(user: str, command: str) -> subprocess.CompletedProcess:
+    """Run a shell command as ``user``, as they could from a terminal of their JupyterLab."""
+    return _run("runuser", "-u", user, "--", "sh", "-c", command, check=False)
+
+
+@dataclass
+class Class:
+    url: str
+    root: Path
+    names: Dict[str, str]  # ada -> ada1f2e
+    passwords: Dict[str, str]
+    roster: Path
+    log: Path
+    pages: Dict[str, object] = field(default_factory=dict)
+
+    def duckie(self, *argv: str, check: bool = True) -> subprocess.CompletedProcess:
+        return _run(DUCKIE, *argv, check=check)
+
+    def hub(self, *argv: str, check: bool = True) -> subprocess.CompletedProcess:
+        return self.duckie("hub", argv[0], *argv[1:], "--hub", str(self.root), check=check)
+
+
+def _wait_for(url: str, process: subprocess.Popen, log: Path, seconds: float = 600) -> None:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if process.poll() is not None:
+            raise AssertionError(
+                f"the hub stopped ({process.returncode}):\n{log.read_text()[-3000:]}"
+            )
+        try:
+            with urllib.request.urlopen(url, timeout=2) as answer:
+                if answer.status == 200:
+                    return
+        except OSError:
+            time.sleep(1)
+    raise AssertionError(f"the hub did not answer within {seconds} s:\n{log.read_text()[-3000:]}")
+
+
+@pytest.fixture(scope="module")
+def klass(tmp_path_factory):
+    if os.geteuid() != 0:
+        pytest.skip("the hub makes Unix accounts and runs servers as them: run as root")
+    if shutil.which("npm") is None and shutil.which("configurable-http-proxy") is None:
+        pytest.skip("JupyterHub's proxy comes from npm: install Node.js and npm")
+    suffix = secrets.token_hex(2)
+    names = {who: f"{who}{suffix}" for who in ("ada", "bo", "cy", "prof")}
+    here = tmp_path_factory.mktemp("hub")
+    roster = here / "export.csv"
+    rows = [
+        "Student,ID,SIS User ID,SIS Login ID,Section",
+        "    Points Possible,,,,",
+        *(
+            f"{who.title()} Test,{i},sis{i},{names[who]},A"
+            for i, who in enumerate(("ada", "bo", "cy"))
+        ),
+    ]
+    roster.write_text("\n".join(rows) + "\n", encoding="utf-8")
+    root = Path(tempfile.mkdtemp(prefix="duckie-hub-", dir="/srv"))
+    mode = ROOT.stat().st_mode & 0o7777
+    process = None
+    try:
+        done = _run(DUCKIE, "hub", "users", str(roster), "--instructor", names["prof"],
+                    "--hub", str(root))  # fmt: skip
+        assert "3 students and 1 instructors may log in" in done.stdout
+        passwords = dict(csv.reader(io.StringIO((root / "passwords.csv").read_text())))
+        assert (root / "passwords.csv").stat().st_mode & 0o777 == 0o600
+        # A repository every user can read is refused: its solutions/ holds the answers.
+        ROOT.chmod(mode | 0o005)
+        if readable_by_others(ROOT / "solutions"):
+            refused = _run(DUCKIE, "hub", "start", "--hub", str(root), check=False)
+            assert refused.returncode == 1
+            assert "can read" in refused.stderr
+            assert "chmod o-rwx" in refused.stderr
+        ROOT.chmod(mode & ~0o007)
+        port = _free_ports(4)
+        log = here / "hub.log"
+        with log.open("w") as output:
+            process = subprocess.Popen(
+                [DUCKIE, "hub", "start", "--hub", str(root), "--port", str(port)],
+                stdout=output,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
+        url = f"http://127.0.0.1:{port}"
+        _wait_for(f"{url}/hub/api", process, log)
+        yield Class(url, root, names, passwords, roster, log)
+    finally:
+        if process is not None and process.poll() is None:
+            os.killpg(process.pid, signal.SIGTERM)
+            try:
+                process.wait(30)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
+        for name in names.values():
+            subprocess.run(["pkill", "-KILL", "-u", name], check=False)
+        time.sleep(0.5)
+        for name in names.values():
+            subprocess.run(["userdel", "--remove", name], check=False, capture_output=True)
+        shutil.rmtree(root, ignore_errors=True)
+        ROOT.chmod(mode)
+
+
+def _login(browser, klass: Class, who: str):
+    if who in klass.pages:
+        return klass.pages[who]
+    context = browser.new_context(viewport={"width": 1400, "height": 900})
+    page = context.new_page()
+    page.set_default_timeout(60_000)
+    page.goto(f"{klass.url}/hub/login")
+    page.fill("#username_input", klass.names[who])
+    page.fill("#password_input", klass.passwords[klass.names[who]])
+    page.click("#login_submit")
+    page.wait_for_selector("#jp-main-dock-panel", timeout=180_000)
+    klass.pages[who] = page
+    return page
+
+
+def _assignment_list(page):
+    page.get_by_text("Nbgrader", exact=True).click()
+    page.locator(".lm-Menu-itemLabel", has_text="Assignment List").click()
+    page.locator("#released_assignments_list").wait_for()
+    return page
+
+
+def _type_into_notebook(page, klass: Class, who: str, code: str, answer: str) -> None:
+    """Open the fetched notebook, replace the exercise and the answer, save."""
+    page.goto(f"{klass.url}/user/{klass.names[who]}/lab/tree/{NOTEBOOK}")
+    page.locator(".jp-Notebook .jp-Cell").first.wait_for()
+    cell = page.locator(".jp-CodeCell", has_text="def robot_topic").first
+    cell.scroll_into_view_if_needed()
+    cell.locator(".cm-content").click()
+    page.keyboard.press("Control+a")
+    page.keyboard.insert_text(code)
+    written = page.locator(".jp-MarkdownCell", has_text=ANSWERS[who][:20])
+    cell = (
+        written.first
+        if written.count()
+        else page.locator(".jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
+    )
+    cell.scroll_into_view_if_needed()
+    cell.dblclick()
+    cell.locator(".cm-content").click()
+    page.keyboard.press("Control+a")
+    page.keyboard.insert_text(answer)
+    page.keyboard.press("Shift+Enter")
+    page.keyboard.press("Control+s")
+    home = Path("/home") / klass.names[who]
+    deadline = time.monotonic() + 30
+    while code.strip() not in _cell(home / NOTEBOOK, "robot_topic"):
+        assert time.monotonic() < deadline, f"{who}'s notebook was not saved within 30 s"
+        time.sleep(0.5)
+
+
+def _cell(path: Path, grade_id: str) -> str:
+    try:
+        notebook = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return ""
+    for cell in notebook["cells"]:
+        if cell["metadata"].get("nbgrader", {}).get("grade_id") == grade_id:
+            return "".join(cell["source"])
+    return ""
+
+
+def _submit(page, times: int) -> None:
+    _assignment_list(page)
+    row = page.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first
+    row.locator("button", has_text="Submit").click()
+    submitted = page.locator("#submitted_assignments_list .list_item", has_text=ASSIGNMENT)
+    deadline = time.monotonic() + 60
+    while page.locator("#submitted_assignments_list").inner_text().count("UTC") < times:
+        assert time.monotonic() < deadline, "the submission did not show in the list"
+        time.sleep(0.5)
+    assert submitted.count() >= 1
+
+
+def _feedback_page(page) -> str:
+    """Fetch Feedback in the Assignment List, open the page it gives, and read it."""
+    _assignment_list(page)
+    row = page.locator("#submitted_assignments_list .list_item", has_text=ASSIGNMENT).first
+    row.locator("button", has_text="Fetch Feedback").click()
+    link = page.locator("#submitted_assignments_list a", has_text="view feedback").first
+    link.wait_for()
+    link.click()
+    page.locator(".jp-DirListing-item", has_text=f"{ASSIGNMENT}.html").dblclick()
+    deadline = time.monotonic() + 60
+    while True:
+        frames = [frame for frame in page.frames if frame != page.main_frame]
+        for frame in frames:
+            try:
+                text = frame.inner_text("body", timeout=2000)
+            except Exception:  # a frame still loading
+                continue
+            if "Feedback for" in text:
+                return text
+        assert time.monotonic() < deadline, "the feedback page did not open"
+        time.sleep(0.5)
+
+
+def _utc(offset_seconds: float = 0) -> str:
+    moment = datetime.datetime.now(datetime.timezone.utc) + datetime.timedelta(
+        seconds=offset_seconds
+    )
+    return moment.strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
+@pytest.mark.slow
+@as_root
+def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, browser, tmp_path):
+    names = klass.names
+    released = klass.hub("release", ASSIGNMENT, "--due", _utc(3600))
+    assert f"released {ASSIGNMENT}" in released.stdout
+
+    # ada fetches, writes a wrong function and an answer, submits; then the due date passes,
+    # she fixes it and submits again, late.
+    ada = _login(browser, klass, "ada")
+    _assignment_list(ada)
+    ada.locator("#released_assignments_list .list_item", has_text=ASSIGNMENT).locator(
+        "button", has_text="Fetch"
+    ).click()
+    ada.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first.wait_for()
+    _type_into_notebook(ada, klass, "ada", WRONG, ANSWERS["ada"])
+    _submit(ada, 1)
+    # The due date falls between the two (nbgrader's due dates count whole seconds).
+    time.sleep(2)
+    klass.hub("release", ASSIGNMENT, "--due", _utc())
+    time.sleep(1.5)
+    _type_into_notebook(ada, klass, "ada", RIGHT, ANSWERS["ada"])
+    _submit(ada, 2)
+
+    # bo submits once, wrong; cy never logs in.
+    bo = _login(browser, klass, "bo")
+    _assignment_list(bo)
+    bo.locator("#released_assignments_list .list_item", has_text=ASSIGNMENT).locator(
+        "button", has_text="Fetch"
+    ).click()
+    bo.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first.wait_for()
+    _type_into_notebook(bo, klass, "bo", WRONG, ANSWERS["bo"])
+    _submit(bo, 1)
+
+    # The instructor collects: before the due date, ada's first try; then the latest.
+    submitted = klass.root / "course" / "submitted"
+    collected = klass.hub("collect", ASSIGNMENT, "--before-due")
+    assert f"2 submissions of {ASSIGNMENT}" in collected.stdout
+    assert f"none from {names['cy']}" in collected.stdout
+    assert _cell(submitted / names["ada"] / NOTEBOOK, "robot_topic").strip() == WRONG.strip()
+    klass.hub("collect", ASSIGNMENT)
+    assert _cell(submitted / names["ada"] / NOTEBOOK, "robot_topic").strip() == RIGHT.strip()
+
+    grading = klass.root / "grading"
+    klass.duckie("grade", str(submitted), "--out", str(grading), "--assignment", ASSIGNMENT,
+                 "--no-driving", "--jobs", "2")  # fmt: skip
+    grades = {row["student"]: row for row in csv.DictReader((grading / "grades.csv").open())}
+    assert set(grades) == {names["ada"], names["bo"]}
+    assert grades[names["ada"]][f"{ASSIGNMENT}:test_robot_topic"] == "2"
+    assert grades[names["bo"]][f"{ASSIGNMENT}:test_robot_topic"] == "0"
+    assert grades[names["ada"]]["to_grade"] == grades[names["bo"]]["to_grade"] == "1"
+
+    # Formgrader is the instructor's, behind the hub's login; a student is turned away.
+    prof = _login(browser, klass, "prof")
+    prof.goto(f"{klass.url}/services/formgrader/")
+    prof.get_by_text("Manage Assignments").first.wait_for()
+    row = prof.locator("tr", has_text=ASSIGNMENT).first
+    assert row.locator("td").last.inner_text() is not None
+    turned = bo.request.get(f"{klass.url}/services/formgrader/formgrader/manage_assignments")
+    assert turned.status == 403 or "do not have permission" in turned.text()
+    # The instructor grades ada's answer (in Formgrader's gradebook, as Formgrader saves it).
+    from nbgrader.api import Gradebook
+
+    with Gradebook(f"sqlite:///{grading / 'work' / 'gradebook.db'}") as gradebook:
+        grade = gradebook.find_grade("answer_find_topic", ASSIGNMENT, ASSIGNMENT, names["ada"])
+        grade.manual_score = 1.5
+        comment = gradebook.find_comment("answer_find_topic", ASSIGNMENT, ASSIGNMENT, names["ada"])
+        comment.manual_comment = COMMENT
+        gradebook.db.commit()
+    # A regrade (nothing new collected) keeps what the instructor gave.
+    klass.hub("collect", ASSIGNMENT)
+    klass.duckie("grade", str(submitted), "--out", str(grading), "--assignment", ASSIGNMENT,
+                 "--no-driving", "--jobs", "2")  # fmt: skip
+    canvas, moodle = tmp_path / "canvas.csv", tmp_path / "moodle.csv"
+    klass.duckie("feedback", str(grading), "--export", "canvas", str(canvas), "--roster",
+                 str(klass.roster))  # fmt: skip
+    moodle_roster = tmp_path / "participants.csv"
+    moodle_roster.write_text(
+        "First name,Last name,Email address\n"
+        + "".join(f"{who},Test,{names[who]}@uni.edu\n" for who in ("ada", "bo", "cy")),
+        encoding="utf-8",
+    )
+    klass.duckie("feedback", str(grading), "--export", "moodle", str(moodle), "--roster",
+                 str(moodle_roster))  # fmt: skip
+    rows = {row["SIS Login ID"]: row for row in csv.DictReader(canvas.open(encoding="utf-8"))}
+    column = next(name for name in rows[names["ada"]] if name.startswith(ASSIGNMENT))
+    assert rows[names["ada"]][column] == "3.5"  # 2 for the test, 1.5 for the answer
+    assert rows[names["bo"]][column] == "0"
+    assert rows[names["cy"]][column] == ""  # never submitted: left as the LMS has it
+    rows = {row["Email address"]: row for row in csv.DictReader(moodle.open(encoding="utf-8"))}
+    assert rows[f"{names['ada']}@uni.edu"][column] == "3.5"
+    assert rows[f"{names['cy']}@uni.edu"][column] == ""
+
+    returned = klass.hub("return", ASSIGNMENT)
+    assert "returned to 2 students" in returned.stdout
+
+    # Each student reads their own page in their JupyterLab, and not the other's.
+    seen = {who: _feedback_page(page) for who, page in (("ada", ada), ("bo", bo))}
+    assert f"Feedback for {names['ada']}" in seen["ada"]
+    assert names["bo"] not in seen["ada"]
+    assert f"Feedback for {names['bo']}" in seen["bo"]
+    assert names["ada"] not in seen["bo"]
+    assert COMMENT in seen["ada"]
+    assert COMMENT not in seen["bo"]
+    assert "3.5 / 10" in seen["ada"]
+
+    # What a student may try, from a terminal of their own JupyterLab.
+    exchange = klass.root / "exchange" / "duckiebot"
+    for attempt in (
+        f"ls /home/{names['bo']}",
+        f"cat /home/{names['bo']}/{NOTEBOOK}",
+        f"ls {exchange / 'inbound'}",
+        f"ls {exchange / 'feedback'}",
+        f"cat {ROOT / 'solutions' / NOTEBOOK}",
+        f"ls {klass.root / 'course'}",
+        f"ls {klass.root / 'grading'}",
+        f"ls {klass.root / 'state'}",
+        f"cat {klass.root / 'passwords.csv'}",
+        f"cat {klass.root / 'jupyterhub_config.py'}",
+    ):
+        tried = _as(names["ada"], attempt)
+        assert tried.returncode != 0, attempt
+        assert "Permission denied" in tried.stderr, attempt
+    # ...and through the hub, with her own login.
+    for path in (f"/user/{names['bo']}/api/contents/{ASSIGNMENT}", "/hub/api/users"):
+        answer = ada.request.get(klass.url + path, max_redirects=0)
+        assert answer.status in (302, 403, 404), (path, answer.status)
+        assert "robot_topic" not in answer.text()
+
+
+@as_root
+def test_returning_feedback_before_grading_says_who_is_not_graded(tmp_path):
+    from autograder.hub import Hub, return_feedback
+
+    hub = Hub(tmp_path / "hub", ["ada"])
+    folder = hub.course / "submitted" / "ada" / ASSIGNMENT
+    folder.mkdir(parents=True)
+    (folder / f"{ASSIGNMENT}.ipynb").write_text("{}")
+    done = return_feedback(hub, ASSIGNMENT)
+    assert (done.returned, done.not_graded) == ([], ["ada"])
