@@ -22,13 +22,14 @@ ROS_PACKAGES := python3-rospy python3-rosbag python3-roslaunch ros-core python3-
 	python3-std-srvs python3-tf2-msgs python3-tf2-ros python3-tf bubblewrap python3-venv \
 	chromium ffmpeg
 
-.PHONY: help venv compiled run test test-fast lab robot ros lint format bench lock clean
+.PHONY: help venv compiled run test test-fast lab hub robot ros lint format bench lock clean
 
 help:
 	@echo "make run     drive the square-then-circle task in the simulator (bag, plot, summary)"
 	@echo "make test    run the whole test suite, on every core"
 	@echo "make test-fast  the quick tests only: the library and the commands (under 2 minutes)"
 	@echo "make lab     start JupyterLab on the course notebooks"
+	@echo "make hub     run the class hub on this machine (as root; see the README)"
 	@echo "make venv    create .venv with the project installed (every other target does it too)"
 	@echo "make robot   ready robot_nodes/ for the robot (SOLUTION=course: with your notebooks)"
 	@echo "make ros     install Debian's ROS 1, bubblewrap and Chromium (needs apt, root or sudo)"
@@ -80,6 +81,13 @@ lab: $(STAMP)
 	JUPYTER_CONFIG_PATH="$(CURDIR)/duckielib/lab$${JUPYTER_CONFIG_PATH:+:$$JUPYTER_CONFIG_PATH}" \
 		$(BIN)/jupyter lab --ServerApp.root_dir="$(LAB_DIR)" --LabApp.default_url=/lab/tree/course \
 		$(LAB_ROOT) $(LAB_ARGS)
+
+# The class hub: JupyterHub with nbgrader's exchange, on this machine (as root: JupyterHub
+# starts each student's server as that student). `duckie hub users ROSTER` first; HUB_ARGS
+# passes more options (--ip 0.0.0.0 --port 8000 --hub /srv/duckiebot-hub).
+HUB_ARGS ?=
+hub: $(STAMP)
+	$(SUDO) $(BIN)/duckie hub start $(HUB_ARGS)
 
 # The course library and a solution into robot_nodes/deploy/: the reference solution unless
 # told (make robot SOLUTION=course).

@@ -236,12 +236,31 @@ def _hub_exchange(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
     return 0
 
 
+def _hub_image(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    out = hubs.write_image(
+        Path(args.out),
+        args.name,
+        hub=hub,
+        authenticator=args.authenticator,
+        progress=lambda line: print(line, flush=True),
+    )
+    print(
+        f"Wrote {out}: build the image there (docker build -t {args.name}:TAG .; the tag is in "
+        f"its Dockerfile), push it, then install the hub with {out / 'values.yaml'}."
+    )
+    return 0
+
+
 def _hub(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from autograder import hub as hubs
 
     hub = hubs.Hub.load(Path(args.hub))
+    if args.hub_command == "image":
+        return _hub_image(hubs, hub, args)
     if args.hub_command == "users":
         return _hub_users(hubs, hub, args)
     if args.hub_command == "start":
@@ -363,6 +382,24 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
     )
     hub_commands.choices["return"].add_argument(
         "--grading", help="where duckie grade wrote the grades (HUB/grading)"
+    )
+    image = hub_commands.add_parser(
+        "image",
+        parents=[place],
+        help="beyond one machine: the students' image and Zero to JupyterHub's values.yaml",
+    )
+    image.add_argument("out", help="a new folder for the Dockerfile, its files and values.yaml")
+    image.add_argument(
+        "--name",
+        required=True,
+        help="the image's name in your registry (registry.example.org/duckiebot-course)",
+    )
+    image.add_argument(
+        "--authenticator",
+        default="nativeauthenticator.NativeAuthenticator",
+        help="the hub's authenticator class (default: NativeAuthenticator: students sign up "
+        "under their roster login and an instructor authorizes them; or your LMS's LTI 1.3 "
+        "or OAuth authenticator)",
     )
     hub.set_defaults(handler=_hub)
     edition = commands.add_parser(

@@ -58,6 +58,7 @@ __all__ = [
     "account_name",
     "collect",
     "create_accounts",
+    "write_image",
     "prepare",
     "readable_by_others",
     "release",
@@ -85,9 +86,15 @@ _SERVER_CONFIG = {
             "nbgrader.server_extensions.assignment_list": True,
             "nbgrader.server_extensions.course_list": False,
             "nbgrader.server_extensions.validate_assignment": True,
+            # Language servers: none is installed, and looking for them runs npm several times
+            # at every server's start (seconds of processor with a class logging in at once).
+            "jupyter_lsp": False,
         },
         "terminado_settings": {"shell_command": ["/bin/sh", "-c", 'exec "${SHELL:-/bin/sh}"']},
-    }
+    },
+    # A class starting its kernels at once on a small machine: a kernel slow to answer is
+    # waited for, not presumed dead after 60 s (`duckie bench hub`: 20 students on 2 cores).
+    "MappingKernelManager": {"kernel_info_timeout": 180},
 }
 _PAGE_CONFIG = {
     "disabledExtensions": {
@@ -470,11 +477,14 @@ def _install_proxy(hub: Hub, say: Callable[[str], None]) -> str:
 
 def _configure_env(hub: Hub) -> None:
     """The course's Jupyter configuration, in the students' Python (every server reads it)."""
-    etc = hub.env / "etc" / "jupyter"
+    _write_jupyter_config(hub.env / "etc" / "jupyter", hub.exchange)
+
+
+def _write_jupyter_config(etc: Path, exchange: Path) -> None:
     (etc / "labconfig").mkdir(parents=True, exist_ok=True)
     _write(etc / "jupyter_server_config.json", json.dumps(_SERVER_CONFIG, indent=2) + "\n", 0o644)
     _write(etc / "labconfig" / "page_config.json", json.dumps(_PAGE_CONFIG, indent=2) + "\n", 0o644)
-    text = _STUDENT_NBGRADER.format(course=COURSE_ID, exchange=str(hub.exchange))
+    text = _STUDENT_NBGRADER.format(course=COURSE_ID, exchange=str(exchange))
     _write(etc / "nbgrader_config.py", text, 0o644)
 
 
@@ -652,3 +662,126 @@ def roster_text(names: Iterable[str]) -> str:
     for name in names:
         writer.writerow([name])
     return out.getvalue()
+
+
+# -- a hub beyond one machine: Zero to JupyterHub on Kubernetes ---------------------------------
+
+#: Where nbgrader's exchange is mounted in the students' pods.
+POD_EXCHANGE = Path("/srv/nbgrader/exchange")
+
+_DOCKERFILE = """\
+# The students' image for a class hub on Kubernetes (Zero to JupyterHub), written by
+# `duckie hub image`: the student edition of the course (no solutions, no grader), JupyterLab
+# with the course's configuration and nbgrader's Assignment List, and jupyterhub-singleuser.
+# Build and push it:  docker build -t {image}:{tag} . && docker push {image}:{tag}
+FROM python:3.11-slim-bookworm
+# ffmpeg: a run player saved as MP4 (notebook 10).
+RUN apt-get update \\
+    && apt-get install -y --no-install-recommends ffmpeg \\
+    && rm -rf /var/lib/apt/lists/*
+RUN useradd --create-home --uid 1000 --gid 100 --shell /bin/bash jovyan
+COPY edition /opt/duckiebot-course
+RUN python -m pip install --no-cache-dir -c /opt/duckiebot-course/constraints.txt \\
+        /opt/duckiebot-course jupyterhub
+# The course's Jupyter configuration: Validate checks every cell, the Assignment List talks
+# to the exchange mounted at {exchange}.
+COPY jupyter /usr/local/etc/jupyter
+USER 1000
+WORKDIR /home/jovyan
+ENV SHELL=/bin/bash
+EXPOSE 8888
+CMD ["jupyterhub-singleuser"]
+"""
+
+_VALUES = """\
+# Zero to JupyterHub values for the course (the jupyterhub Helm chart, 4.x), written by
+# `duckie hub image`:
+#   helm upgrade --install duckiebot jupyterhub/jupyterhub --values values.yaml
+# Sized from `duckie bench hub` (see the README): about 220 MB per student after a notebook's
+# Run All, and one core runs about one notebook's Run All at a time at full speed.
+singleuser:
+  image:
+    name: {image}
+    tag: "{tag}"
+  defaultUrl: /lab
+  cmd: jupyterhub-singleuser
+  memory:
+    guarantee: 512M
+    limit: 2G
+  cpu:
+    guarantee: 0.25
+    limit: 2
+  storage:
+    capacity: 2Gi
+    extraVolumes:
+      # nbgrader's exchange: one ReadWriteMany volume (NFS, CephFS...) shared by every pod
+      # and the instructors' machine, made before the install.
+      - name: nbgrader-exchange
+        persistentVolumeClaim:
+          claimName: nbgrader-exchange
+    extraVolumeMounts:
+      - name: nbgrader-exchange
+        mountPath: {exchange}
+hub:
+  config:
+    JupyterHub:
+      authenticator_class: {authenticator}
+    Authenticator:
+      admin_users: {instructors}
+      allowed_users: {students}
+  extraConfig:
+    duckiebot-accounts: |
+      # Each student's pod runs as a Unix user of its own, as on one machine: nbgrader's
+      # exchange then keeps each submission to its student (one uid for all would let every
+      # student read every submission). USER names the student for nbgrader.
+      c.KubeSpawner.uid = lambda spawner: 100000 + spawner.user.id
+      c.KubeSpawner.gid = 100
+      c.KubeSpawner.fs_gid = 100
+      c.KubeSpawner.environment.update({{"USER": lambda spawner: spawner.user.name}})
+"""
+
+
+def write_image(
+    out: Path,
+    image: str,
+    hub: Optional[Hub] = None,
+    authenticator: str = "nativeauthenticator.NativeAuthenticator",
+    progress: Optional[Callable[[str], None]] = None,
+) -> Path:
+    """Write a Docker build folder for the students' image, and its Zero to JupyterHub values.
+
+    ``out`` gets the student edition (``edition/``), the course's Jupyter configuration
+    (``jupyter/``), a ``Dockerfile`` and ``values.yaml`` (the image, the exchange's volume, the
+    accounts of ``hub`` if given, each student's pod its own uid).
+
+    Raises:
+        HubError: if ``out`` exists and is not empty.
+    """
+    from autograder.edition import build_edition
+
+    out = Path(out).absolute()
+    if out.exists() and any(out.iterdir()):
+        raise HubError(f"{out} is not empty: give a new folder for the image's files.")
+    say = progress or (lambda line: None)
+    say("building the student edition (what students receive) ...")
+    edition = build_edition(out / "edition")
+    shutil.rmtree(out / "edition" / ".git")
+    _write_jupyter_config(out / "jupyter", POD_EXCHANGE)
+    tag = edition.commit[:12]
+    _write(
+        out / "Dockerfile",
+        _DOCKERFILE.format(image=image, tag=tag, exchange=str(POD_EXCHANGE)),
+        0o644,
+    )
+    students = sorted(hub.students) if hub else []
+    instructors = sorted(hub.instructors) if hub else []
+    values = _VALUES.format(
+        image=image,
+        tag=tag,
+        exchange=str(POD_EXCHANGE),
+        authenticator=authenticator,
+        instructors=json.dumps(instructors),
+        students=json.dumps(students + instructors),
+    )
+    _write(out / "values.yaml", values, 0o644)
+    return out

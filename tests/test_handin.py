@@ -223,6 +223,9 @@ def test_handin_refuses_what_it_cannot_do_in_one_sentence(tmp_path, capsys):
         (["handin", str(tmp_path / "empty"), "-o", "ada.zip"], "holds no course notebook"),
         (["handin", str(tmp_path / "empty"), "-o", "ada.tar"], "must end in .zip"),
         (["handin", str(tmp_path), "-o", str(tmp_path / "no" / "ada.zip")], "There is no folder"),
+        (["handin"], "Say where to write the zip with -o NAME.zip"),
+        (["handin", "-o", "ada.zip", "--submit", "05_odometry"], "either --submit"),
+        (["handin", str(tmp_path), "--submit", "05_odometry"], "fetch the assignment first"),
     ):
         assert main(argv) == 1
         err = capsys.readouterr().err
@@ -234,3 +237,19 @@ def test_handin_refuses_what_it_cannot_do_in_one_sentence(tmp_path, capsys):
     write_notebook(tmp_path / "c" / "01_x" / "01_x.ipynb", [])
     with pytest.raises(HandinError, match="outside"):
         handin(tmp_path / "c", tmp_path / "c" / "ada.zip")
+
+
+def test_submitting_off_a_hub_says_so_after_checking_the_notebook(tmp_path, capsys, monkeypatch):
+    # No exchange here: nbgrader's own refusal, in a sentence that says where submitting works.
+    course = tmp_path / "home"
+    shutil.copytree(ROOT / "course" / "01_getting_started", course / "01_getting_started")
+    monkeypatch.setenv("JUPYTER_CONFIG_DIR", str(tmp_path / "jupyter"))
+    (tmp_path / "jupyter").mkdir()
+    (tmp_path / "jupyter" / "nbgrader_config.py").write_text(
+        f"c = get_config()\nc.Exchange.root = {str(tmp_path / 'no-exchange')!r}\n"
+    )
+    assert main(["handin", str(course), "--submit", "01_getting_started"]) == 1
+    out, err = capsys.readouterr()
+    assert "01_getting_started: " in out  # the check ran first, as grading runs it
+    assert err.startswith("duckie: 01_getting_started could not be submitted: ")
+    assert "elsewhere, hand in a zip with duckie handin -o NAME.zip" in err

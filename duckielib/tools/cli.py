@@ -221,9 +221,40 @@ def _export(args: argparse.Namespace) -> int:
     return 0
 
 
+def _submit(args: argparse.Namespace) -> int:
+    from duckielib.tools.handin import submit
+
+    folder = args.folder or "."
+    print(
+        f"Running {args.submit} from top to bottom as saved, as grading does, then submitting "
+        "it...",
+        flush=True,
+    )
+    check = submit(folder, args.submit, progress=lambda run: print(run.summary(), flush=True))
+    if any(not run.clean for run in check.runs):
+        print(
+            "It does not run to the end yet or fails a visible test: fix it if you can, then "
+            "submit again (your instructor collects the latest submission)."
+        )
+    answers = check.answers_left()
+    if answers:
+        print(answers)
+    print(f"Submitted {args.submit}: it shows under Submitted assignments in the Assignment List.")
+    return 0
+
+
 def _handin(args: argparse.Namespace) -> int:
     from duckielib.tools.handin import check_minutes, handin, handin_notebooks
 
+    if args.submit:
+        if args.output:
+            raise DuckielibError("Give either --submit ASSIGNMENT or -o NAME.zip, not both.")
+        return _submit(args)
+    if not args.output:
+        raise DuckielibError(
+            "Say where to write the zip with -o NAME.zip (on a class hub: --submit ASSIGNMENT)."
+        )
+    args.folder = args.folder or "course"
     count = len(handin_notebooks(args.folder, args.output))
     notebooks = f"{count} notebook" + ("" if count == 1 else "s")
     minutes = check_minutes(count)
@@ -254,10 +285,15 @@ def _add_handin(commands: argparse._SubParsersAction) -> None:
         "handin", help="check your notebooks as grading runs them, and zip them to hand in"
     )
     hand.add_argument(
-        "folder", nargs="?", default="course", help="your folder of notebooks (default: course)"
+        "folder",
+        nargs="?",
+        help="your folder of notebooks (default: course; with --submit, this folder)",
     )
+    hand.add_argument("-o", "--output", help="the zip to write, named after you (NAME.zip)")
     hand.add_argument(
-        "-o", "--output", required=True, help="the zip to write, named after you (NAME.zip)"
+        "--submit",
+        metavar="ASSIGNMENT",
+        help="on a class hub: check ASSIGNMENT, then submit it as the Assignment List does",
     )
     hand.set_defaults(handler=_handin)
 

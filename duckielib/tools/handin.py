@@ -41,6 +41,7 @@ __all__ = [
     "handin_notebooks",
     "raised_cells",
     "run_notebook",
+    "submit",
     "waiting_tests",
 ]
 
@@ -652,4 +653,54 @@ def handin(
         for name, data in snapshot.items():
             archive.writestr(name, data)
     partial.replace(output)
+    return check
+
+
+#: The course's name in nbgrader's exchange, on a class hub (``duckie hub``).
+COURSE_ID = "duckiebot"
+
+
+def submit(
+    folder: Union[str, Path],
+    assignment: str,
+    progress: Optional[Callable[[NotebookRun], None]] = None,
+) -> CourseCheck:
+    """On a class hub: check an assignment as the grader runs it, then submit it.
+
+    The assignment's notebooks run as :func:`handin` runs them (the other notebooks of
+    ``folder`` beside them, as their neighbours), then nbgrader's ``submit`` hands the
+    assignment's folder in through the hub's exchange, as the Assignment List's Submit button
+    does. It is submitted even when work is unfinished: the check says what is left, and you
+    may submit again (your instructor collects the latest).
+
+    Raises:
+        HandinError: if ``folder/assignment`` is not there (fetch it first) or nbgrader cannot
+            submit it (its reason, in a sentence).
+    """
+    folder = Path(folder)
+    if not (folder / assignment / f"{assignment}.ipynb").is_file():
+        raise HandinError(
+            f"There is no {assignment}/{assignment}.ipynb in {folder.resolve()}: fetch the "
+            "assignment first (Nbgrader > Assignment List > Fetch), then run this command in "
+            "the folder that holds it."
+        )
+    snapshot = _snapshot(course_notebooks(folder))
+    check = _check_snapshot(folder, snapshot, [assignment], CELL_SECONDS, progress)
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-m", "nbgrader", "submit", assignment, f"--course={COURSE_ID}"],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    if done.returncode != 0:
+        said = [line for line in (done.stdout + done.stderr).splitlines() if line.strip()]
+        reason = said[-1] if said else f"nbgrader exited with {done.returncode}"
+        raise HandinError(
+            f"{assignment} could not be submitted: {reason}. Submitting works on a class hub "
+            "(its Assignment List); elsewhere, hand in a zip with duckie handin -o NAME.zip."
+        )
     return check
