@@ -191,7 +191,7 @@ async def _connect(client: _Client, name: str, kernel: str, done: Student) -> An
             connection = await client.channels(name, kernel)
             identity, text = _message("kernel_info_request", {})
             await connection.write_message(text)
-            await _reply(connection, identity, "kernel_info_reply", 300)
+            await _reply(connection, identity, "kernel_info_reply", 120)
             return connection
         except ConnectionError:
             if attempt > RECONNECTS:

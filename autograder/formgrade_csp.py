@@ -4,7 +4,7 @@ Formgrader shows students' notebooks in the instructor's JupyterLab, on the same
 Jupyter server's API: a script from a student's output would act with the instructor's rights.
 ``duckie formgrade`` loads this module as a Jupyter server extension. Every response under
 ``/formgrader`` then carries a policy that lets a script run only if it carries the response's
-nonce (a new random one per response), or if it is one of Formgrader's three own ``onclick``
+nonce (a new random one per response), or if it is one of Formgrader's five own ``onclick``
 handlers (by their hash), and loads nothing from elsewhere: no external script,
 image, font or connection, no plugin, no form sent elsewhere, no ``<base>``.
 
@@ -28,8 +28,15 @@ from typing import Any
 __all__ = ["POLICY", "protect"]
 
 #: Formgrader's own inline event handlers (its templates' ``onclick``), allowed by their hash:
-#: these three exact texts run, no other handler does.
-OWN_HANDLERS = ("toggle_name(true);", "toggle_name(false);", "toggleAllNames()")
+#: these five exact texts run, no other handler does (``tests/test_formgrade_safety.py`` reads
+#: them out of nbgrader's templates).
+OWN_HANDLERS = (
+    "toggle_name(true);",
+    "toggle_name(false);",
+    "toggleAllNames()",
+    "createAssignmentModal();",
+    "createStudentModal();",
+)
 _HASHES = " ".join(
     f"'sha256-{base64.b64encode(hashlib.sha256(text.encode()).digest()).decode()}'"
     for text in OWN_HANDLERS

@@ -91,10 +91,7 @@ _SERVER_CONFIG = {
             "jupyter_lsp": False,
         },
         "terminado_settings": {"shell_command": ["/bin/sh", "-c", 'exec "${SHELL:-/bin/sh}"']},
-    },
-    # A class starting its kernels at once on a small machine: a kernel slow to answer is
-    # waited for, not presumed dead after 60 s (`duckie bench hub`: 20 students on 2 cores).
-    "MappingKernelManager": {"kernel_info_timeout": 180},
+    }
 }
 _PAGE_CONFIG = {
     "disabledExtensions": {
