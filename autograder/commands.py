@@ -216,6 +216,13 @@ def _hub_exchange(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
         missing = sorted(set(hub.students) - set(students))
         none = f"; none from {', '.join(missing)}" if missing else ""
         print(f"{len(students)} submissions of {args.assignment} are in {submitted}{none}.")
+        late = hubs.lateness(hub, args.assignment)
+        if late:
+            print(
+                "after the due date: "
+                + ", ".join(f"{name} ({_duration(seconds)} late)" for name, seconds in late.items())
+                + "."
+            )
         print(
             f"grade them with: duckie grade {submitted} --out {hub.grading} "
             f"--assignment {args.assignment}"
@@ -251,6 +258,17 @@ def _hub_image(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
         f"its Dockerfile), push it, then install the hub with {out / 'values.yaml'}."
     )
     return 0
+
+
+def _duration(seconds: float) -> str:
+    """A delay in words: 40 s, 12 min, 3.5 h, 2.0 days."""
+    if seconds < 60:
+        return f"{seconds:.0f} s"
+    if seconds < 3600:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 86400:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
 
 
 def _hub(args: argparse.Namespace) -> int:

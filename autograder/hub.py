@@ -58,9 +58,10 @@ __all__ = [
     "account_name",
     "collect",
     "create_accounts",
+    "lateness",
     "write_image",
     "prepare",
-    "readable_by_others",
+    "reachable_by_others",
     "release",
     "return_feedback",
 ]
@@ -73,6 +74,9 @@ COURSE_ID = "duckiebot"
 
 #: The version of configurable-http-proxy installed from npm when none is on the PATH.
 PROXY_PACKAGE = "configurable-http-proxy@4.6.3"
+
+#: The first uid of a person's account (Debian's UID_MIN): below are the system's own.
+FIRST_UID = 1000
 
 #: A Unix account name useradd accepts everywhere: a letter first, at most 32 characters.
 _ACCOUNT = re.compile(r"^[a-z_][a-z0-9_-]{0,31}$")
@@ -357,6 +361,14 @@ def create_accounts(
             raise HubError(f"{name} is both a student of the roster and an instructor.")
     if shutil.which("useradd") is None or shutil.which("chpasswd") is None:
         raise HubError("useradd and chpasswd are missing: install Debian's passwd package.")
+    for name in [*teachers, *students]:
+        if _account_exists(name) and pwd.getpwnam(name).pw_uid < FIRST_UID:
+            raise HubError(
+                f"{name} is a system account of this machine (uid {pwd.getpwnam(name).pw_uid}): "
+                "give that student another login in the roster."
+            )
+    passwords = hub.root / "passwords.csv"
+    hub.save()  # the hub's folder, before the first password goes into it
     created: Dict[str, str] = {}
     for name in [*teachers, *students]:
         if _account_exists(name):
@@ -373,29 +385,28 @@ def create_accounts(
         if done.returncode != 0:
             raise HubError(f"Cannot set the password of {name}: {done.stderr.strip()}.")
         created[name] = password
+        # Kept at once: an account whose password is lost would need root to open.
+        old = passwords.read_text(encoding="utf-8") if passwords.is_file() else "account,password\n"
+        _write(passwords, old + f"{name},{password}\n", 0o600)
         say(f"{name}: account made")
     for name in [*teachers, *students]:
         Path(pwd.getpwnam(name).pw_dir).chmod(0o700)  # a home only its user opens
     hub.students = sorted(set(hub.students) | set(students))
     hub.instructors = sorted(set(hub.instructors) | set(teachers))
     hub.save()
-    if created:
-        passwords = hub.root / "passwords.csv"
-        old = passwords.read_text(encoding="utf-8") if passwords.is_file() else "account,password\n"
-        lines = "".join(f"{name},{password}\n" for name, password in created.items())
-        _write(passwords, old + lines, 0o600)
     return created
 
 
 # -- the environment and the configuration ---------------------------------------------------
 
 
-def readable_by_others(path: Path) -> bool:
-    """Whether any user of the machine can list ``path`` (every folder above it lets them in)."""
+def reachable_by_others(path: Path) -> bool:
+    """Whether any user of the machine can get into the folder ``path``.
+
+    It and every folder above it let others through: then they can open every file in it that
+    others may read, whether they can list the folder or not.
+    """
     path = Path(path).absolute()
-    mode = path.stat().st_mode
-    if not mode & stat.S_IROTH:
-        return False
     return all(folder.stat().st_mode & stat.S_IXOTH for folder in [path, *path.parents])
 
 
@@ -406,7 +417,7 @@ def _python(python: Optional[str]) -> str:
         if not candidate or not Path(candidate).exists():
             continue
         real = Path(candidate).resolve()
-        if not python and not readable_by_others(real.parent):
+        if not python and not reachable_by_others(real.parent):
             continue
         done = subprocess.run(
             [candidate, "-c", "import sys, venv; print(sys.version_info >= (3, 11))"],
@@ -513,7 +524,7 @@ def prepare(
             f"{hub.root} has no accounts yet: add them first with "
             f"`duckie hub users ROSTER.csv --instructor NAME --hub {hub.root}`."
         )
-    if readable_by_others(ROOT / "solutions"):
+    if reachable_by_others(ROOT / "solutions"):
         raise HubError(
             f"Every user of this machine can read {ROOT / 'solutions'} (the answers and hidden "
             f"tests): close the repository first (chmod o-rwx {ROOT}), then start the hub again."
@@ -610,6 +621,34 @@ def collect(hub: Hub, assignment: str, before_due: bool = False) -> List[str]:
     _nbgrader(hub, *arguments)
     submitted = hub.course / "submitted"
     return sorted(folder.name for folder in submitted.glob("*") if (folder / assignment).is_dir())
+
+
+def lateness(hub: Hub, assignment: str) -> Dict[str, float]:
+    """How late each collected submission of ``assignment`` is, in seconds (late ones only).
+
+    Measured as nbgrader measures it: the submission's time (its ``timestamp.txt``) against the
+    due date ``duckie hub release --due`` set; no due date, nobody late.
+    """
+    from nbgrader.api import Gradebook, MissingEntry
+    from nbgrader.utils import parse_utc
+
+    database = hub.course / "gradebook.db"
+    if not database.is_file():
+        return {}
+    with Gradebook(f"sqlite:///{database}", COURSE_ID) as gradebook:
+        try:
+            due = gradebook.find_assignment(assignment).duedate
+        except MissingEntry:
+            return {}
+    if due is None:
+        return {}
+    late: Dict[str, float] = {}
+    for stamp in sorted((hub.course / "submitted").glob(f"*/{assignment}/timestamp.txt")):
+        moment = parse_utc(stamp.read_text(encoding="utf-8").strip())
+        seconds = (moment - due).total_seconds()
+        if seconds > 0:
+            late[stamp.parent.parent.name] = seconds
+    return late
 
 
 @dataclass

@@ -31,7 +31,7 @@ from typing import Dict
 import pytest
 
 from autograder.course import ROOT
-from autograder.hub import HubError, account_name, readable_by_others, roster_accounts
+from autograder.hub import HubError, account_name, reachable_by_others, roster_accounts
 
 DUCKIE = str(Path(sys.executable).parent / "duckie")
 ASSIGNMENT = "02_ros_concepts"
@@ -94,19 +94,28 @@ def test_a_roster_gives_each_student_one_account_and_refuses_two_sharing_one(tmp
         roster_accounts(roster)
 
 
-def test_readable_by_others_looks_at_every_folder_above(tmp_path):
+def test_reachable_by_others_looks_at_every_folder_above(tmp_path):
     inner = tmp_path / "a" / "b"
     inner.mkdir(parents=True)
-    inner.chmod(0o755)
-    (tmp_path / "a").chmod(0o755)
-    tmp_path.chmod(0o755)
+    for folder in (inner, tmp_path / "a", tmp_path):
+        folder.chmod(0o755)
     opened = all(folder.stat().st_mode & 0o001 for folder in tmp_path.parents)
-    assert readable_by_others(inner) is opened
+    assert reachable_by_others(inner) is opened
+    inner.chmod(0o711)  # not listed, but a file's known name still opens it
+    assert reachable_by_others(inner) is opened
     (tmp_path / "a").chmod(0o750)
-    assert readable_by_others(inner) is False
-    (tmp_path / "a").chmod(0o755)
-    inner.chmod(0o711)
-    assert readable_by_others(inner) is False
+    assert reachable_by_others(inner) is False
+
+
+@as_root
+def test_a_roster_login_that_is_a_system_account_is_refused(tmp_path):
+    from autograder.hub import Hub, create_accounts
+
+    roster = tmp_path / "roster.csv"
+    roster.write_text("login\nada\ndaemon\n", encoding="utf-8")
+    with pytest.raises(HubError, match=r"daemon is a system account of this machine \(uid 1\)"):
+        create_accounts(Hub(tmp_path / "hub"), roster)
+    assert not (tmp_path / "hub" / "passwords.csv").exists()
 
 
 # -- a class on a real hub ----------------------------------------------------------------------
@@ -203,7 +212,7 @@ def klass(tmp_path_factory):
         assert (root / "passwords.csv").stat().st_mode & 0o777 == 0o600
         # A repository every user can read is refused: its solutions/ holds the answers.
         ROOT.chmod(mode | 0o005)
-        if readable_by_others(ROOT / "solutions"):
+        if reachable_by_others(ROOT / "solutions"):
             refused = _run(DUCKIE, "hub", "start", "--hub", str(root), check=False)
             assert refused.returncode == 1
             assert "can read" in refused.stderr
@@ -343,6 +352,7 @@ def _utc(offset_seconds: float = 0) -> str:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1500)  # the students' Python installed first (1.5 min), then the class
 @as_root
 def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, browser, tmp_path):
     names = klass.names
@@ -352,6 +362,16 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
     # ada fetches, writes a wrong function and an answer, submits; then the due date passes,
     # she fixes it and submits again, late.
     ada = _login(browser, klass, "ada")
+    # Her JupyterLab is the course's: the widgets' front end (the run player, the image view)
+    # and nbgrader's student tools, not its instructor tools.
+    html = ada.request.get(f"{klass.url}/user/{names['ada']}/lab").text()
+    start = html.index('id="jupyter-config-data"')
+    start = html.index(">", start) + 1
+    config = json.loads(html[start : html.index("</script>", start)])
+    served = {extension["name"] for extension in config["federated_extensions"]}
+    assert {"@jupyter-widgets/jupyterlab-manager", "@jupyter/nbgrader"} <= served
+    assert "@jupyter/nbgrader:formgrader" in config["disabledExtensions"]
+    assert "@jupyter/nbgrader:assignment-list" not in config["disabledExtensions"]
     _assignment_list(ada)
     ada.locator("#released_assignments_list .list_item", has_text=ASSIGNMENT).locator(
         "button", has_text="Fetch"
@@ -391,8 +411,15 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
     assert f"2 submissions of {ASSIGNMENT}" in collected.stdout
     assert f"none from {names['cy']}" in collected.stdout
     assert _cell(submitted / names["ada"] / NOTEBOOK, "robot_topic").strip() == WRONG.strip()
-    klass.hub("collect", ASSIGNMENT)
+    # bo's only submission came after the due date: taken all the same, and said.
+    late = collected.stdout.split("after the due date: ")[1].splitlines()[0]
+    assert f"{names['bo']} (" in late
+    assert names["ada"] not in late
+    collected = klass.hub("collect", ASSIGNMENT)
     assert _cell(submitted / names["ada"] / NOTEBOOK, "robot_topic").strip() == RIGHT.strip()
+    late = collected.stdout.split("after the due date: ")[1].splitlines()[0]
+    assert f"{names['ada']} (" in late
+    assert " s late" in late
 
     grading = klass.root / "grading"
     klass.duckie("grade", str(submitted), "--out", str(grading), "--assignment", ASSIGNMENT,
