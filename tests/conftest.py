@@ -28,7 +28,6 @@ LONGEST_FIRST = (
     "tests/test_driving.py",
     "tests/adversarial/test_class.py",
     "tests/course/test_course_lab.py",
-    "tests/test_hub.py",
     "tests/test_grade.py",
     "tests/test_grade_cluster.py",
     "tests/adversarial/test_adversarial.py",
