@@ -50,7 +50,7 @@ from autograder.course import ROOT
 #: What ``duckie bench`` lists for this benchmark.
 DESCRIPTION = "a class hub: N students start JupyterLab and Run All one notebook at once"
 
-__all__ = ["DESCRIPTION", "N", "NOTEBOOK", "run"]
+__all__ = ["DESCRIPTION", "N", "NOTEBOOK", "free_ports", "run"]
 
 #: Students at once.
 N = int(os.environ.get("DUCKIE_BENCH_HUB_N", "20"))
@@ -87,7 +87,8 @@ class Student:
     failure: str = ""
 
 
-def _free_ports(count: int) -> int:
+def free_ports(count: int) -> int:
+    """The first of ``count`` consecutive free ports on this machine's loopback."""
     for _ in range(200):
         first = 20000 + secrets.randbelow(20000)
         try:
@@ -348,7 +349,7 @@ def run(students: Optional[int] = None) -> List[Tuple[str, str]]:
         roster.write_text("login\n" + "".join(f"{name}\n" for name in names), encoding="utf-8")
         create_accounts(hub, roster)
         ROOT.chmod(mode & ~0o007)
-        port = _free_ports(4)
+        port = free_ports(4)
         started = time.monotonic()
         prepare(hub, port=port)
         env_s = time.monotonic() - started

@@ -31,8 +31,6 @@ released under a name only the student's own submission secret gives.
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import os
 import pwd
@@ -44,7 +42,7 @@ import subprocess
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Dict, Iterable, List, Optional, Sequence
+from typing import Callable, Dict, List, Optional, Sequence
 
 from autograder.course import IGNORED, ROOT, CourseError
 from autograder.formgrade import write_config
@@ -688,16 +686,6 @@ def return_feedback(hub: Hub, assignment: str, grading: Optional[Path] = None) -
     if done.returned:
         _nbgrader(hub, "release_feedback", assignment)
     return done
-
-
-def roster_text(names: Iterable[str]) -> str:
-    """A roster CSV of account names (``login`` column), as ``duckie hub users`` reads it."""
-    out = io.StringIO()
-    writer = csv.writer(out, lineterminator="\n")
-    writer.writerow(["login"])
-    for name in names:
-        writer.writerow([name])
-    return out.getvalue()
 
 
 # -- a hub beyond one machine: Zero to JupyterHub on Kubernetes ---------------------------------

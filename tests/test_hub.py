@@ -18,7 +18,6 @@ import os
 import secrets
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -30,6 +29,7 @@ from typing import Dict
 
 import pytest
 
+from autograder.bench_hub import free_ports
 from autograder.course import ROOT
 from autograder.hub import HubError, account_name, reachable_by_others, roster_accounts
 
@@ -121,20 +121,6 @@ def test_a_roster_login_that_is_a_system_account_is_refused(tmp_path):
 # -- a class on a real hub ----------------------------------------------------------------------
 
 
-def _free_ports(count: int) -> int:
-    """A first port of ``count`` consecutive free ones."""
-    for _ in range(200):
-        first = 20000 + secrets.randbelow(20000)
-        try:
-            for port in range(first, first + count):
-                with socket.socket() as probe:
-                    probe.bind(("127.0.0.1", port))
-        except OSError:
-            continue
-        return first
-    raise RuntimeError("no free ports")
-
-
 def _run(*argv: str, check: bool = True) -> subprocess.CompletedProcess:
     done = subprocess.run(argv, capture_output=True, text=True, check=False, timeout=900)
     if check and done.returncode != 0:
@@ -218,7 +204,7 @@ def klass(tmp_path_factory):
             assert "can read" in refused.stderr
             assert "chmod o-rwx" in refused.stderr
         ROOT.chmod(mode & ~0o007)
-        port = _free_ports(4)
+        port = free_ports(4)
         log = here / "hub.log"
         with log.open("w") as output:
             process = subprocess.Popen(
@@ -267,6 +253,14 @@ def _assignment_list(page):
     page.locator(".lm-Menu-itemLabel", has_text="Assignment List").click()
     page.locator("#released_assignments_list").wait_for()
     return page
+
+
+def _fetch(page) -> None:
+    """Fetch the assignment in the Assignment List, as a student does."""
+    _assignment_list(page)
+    released = page.locator("#released_assignments_list .list_item", has_text=ASSIGNMENT)
+    released.locator("button", has_text="Fetch").click()
+    page.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first.wait_for()
 
 
 def _type_into_notebook(page, klass: Class, who: str, code: str, answer: str) -> None:
@@ -372,11 +366,7 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
     assert {"@jupyter-widgets/jupyterlab-manager", "@jupyter/nbgrader"} <= served
     assert "@jupyter/nbgrader:formgrader" in config["disabledExtensions"]
     assert "@jupyter/nbgrader:assignment-list" not in config["disabledExtensions"]
-    _assignment_list(ada)
-    ada.locator("#released_assignments_list .list_item", has_text=ASSIGNMENT).locator(
-        "button", has_text="Fetch"
-    ).click()
-    ada.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first.wait_for()
+    _fetch(ada)
     _type_into_notebook(ada, klass, "ada", WRONG, ANSWERS["ada"])
     _submit(ada, 1)
     # The due date falls between the two (nbgrader's due dates count whole seconds).
@@ -388,11 +378,7 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
 
     # bo submits once, wrong; cy never logs in.
     bo = _login(browser, klass, "bo")
-    _assignment_list(bo)
-    bo.locator("#released_assignments_list .list_item", has_text=ASSIGNMENT).locator(
-        "button", has_text="Fetch"
-    ).click()
-    bo.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first.wait_for()
+    _fetch(bo)
     _type_into_notebook(bo, klass, "bo", WRONG, ANSWERS["bo"])
     # ...from a terminal of his JupyterLab, which checks it first as the grader runs it.
     env = klass.root / "env" / "bin"
