@@ -12,6 +12,7 @@ import signal
 from pathlib import Path
 
 import pytest
+from pace import pace
 
 _IN_CI = os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
 #: Debian's Chromium, which the browser tests drive (Playwright's own download is not used).
@@ -46,6 +47,8 @@ LONGEST_FIRST = (
 
 
 def pytest_configure(config):
+    # Measured before the workers start, so that they and what they run share one pace.
+    config.pace = pace()
     # A suite started in the background (`nohup make test &`) begins with Ctrl-C ignored, and
     # every process it starts would inherit that: the tests of what Ctrl-C does need it as in
     # a terminal. (A handler, unlike "ignore", is not passed on to the processes started.)
@@ -53,7 +56,19 @@ def pytest_configure(config):
         signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
+def pytest_report_header(config):
+    return f"pace: {config.pace:.2f} (the time limits of the tests, times the reference's)"
+
+
 def pytest_collection_modifyitems(config, items):
+    # Each test's own time limit grows with the pace, as the limits the tests set do.
+    default = config.getoption("timeout", None)
+    default = config.getini("timeout") if default is None else default
+    for item in items:
+        marker = item.get_closest_marker("timeout")
+        limit = marker.args[0] if marker is not None and marker.args else default
+        if limit and config.pace > 1:
+            item.add_marker(pytest.mark.timeout(float(limit) * config.pace), append=False)
     rank = {module: place for place, module in enumerate(LONGEST_FIRST)}
     # A stable sort: each module's tests stay together and in their order.
     items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))

@@ -14,6 +14,7 @@ import subprocess
 
 import pytest
 from adversarial.cases import FORGES_THE_DRIVE, NEVER_DRIVES
+from pace import seconds
 
 from autograder.course import ROOT
 from autograder.driving import (
@@ -156,12 +157,12 @@ def test_a_mission_that_runs_out_of_wall_time_leaves_the_next_ones_undriven(sand
         "    while True:\n        sum(range(200000))\n        rospy.get_time()\n"
     )
     solution.write_text(source + slow)
-    missions = drive_missions(solution, tmp_path / "box", Limits(mission_seconds=5))
+    missions = drive_missions(solution, tmp_path / "box", Limits(mission_seconds=seconds(5)))
     assert missions["square_then_circle"].timed_out
     assert {name: driving.score for name, driving in missions.items()} == dict.fromkeys(MISSIONS, 0)
     assert missions["rotation"].reasons == [
-        "Not driven: the square_then_circle mission did not end within 5 s of wall time, and "
-        "the same nodes drive this one."
+        "Not driven: the square_then_circle mission did not end within "
+        f"{seconds(5)} s of wall time, and the same nodes drive this one."
     ]
 
 
@@ -272,7 +273,7 @@ def test_a_mission_that_never_ends_is_scored_from_its_bag_in_the_sandbox(
     sandbox, tmp_path, reference
 ):
     endless = changed(reference, _DONE, "while True:\n        rospy.sleep(1.0)", tmp_path / "s.py")
-    driving = drive(endless, tmp_path / "box", Limits(mission_seconds=120))
+    driving = drive(endless, tmp_path / "box", Limits(mission_seconds=seconds(120)))
     assert driving.reasons[:2] == [
         "The mission could not run to its end: The mission did not announce 'done' within 240 "
         "simulated seconds (last log: state circle (YELLOW)).",
@@ -288,7 +289,9 @@ def test_a_mission_that_never_ends_is_stopped_by_the_wall_clock_and_scored(
     # A busy loop after the circle: the simulation cannot go on, so the graph stops the node
     # after the stall limit's real seconds, saying why.
     busy = changed(reference, _DONE, "while True:\n        pass", tmp_path / "s.py")
-    driving = drive(busy, tmp_path / "box", Limits(mission_seconds=20, stall_seconds=3))
+    driving = drive(
+        busy, tmp_path / "box", Limits(mission_seconds=seconds(20), stall_seconds=seconds(3))
+    )
     assert driving.reasons[:2] == [STALLED, "It is scored from the bag it wrote until then."]
     assert driving.parts == {
         "bag": 5, "states": 0, "stops": 15, "square": 20, "return": 20, "circle": 20,
@@ -297,7 +300,8 @@ def test_a_mission_that_never_ends_is_stopped_by_the_wall_clock_and_scored(
 
 #: Why the graph stops a mission node whose code never waits (with a stall limit of 3 s).
 STALLED = (
-    "The mission could not run to its end: The mission node stopped: its code ran for 3 s of "
+    "The mission could not run to its end: The mission node stopped: its code ran for "
+    f"{seconds(3)} s of "
     "real time without calling rospy, and simulated time cannot move while a node's code runs: "
     "a loop that waits for a callback or another thread never sees it happen. Wait inside the "
     "loop with rospy.sleep() or rate.sleep()."
@@ -308,7 +312,9 @@ def test_a_busy_node_from_the_start_scores_zero_saying_why_it_was_stopped(sandbo
     source = export_solution(ROOT / "solutions").source
     solution = tmp_path / "solution.py"
     solution.write_text(source + "\n\ndef mission_node(mission):\n    while True:\n        pass\n")
-    driving = drive(solution, tmp_path / "box", Limits(mission_seconds=15, stall_seconds=3))
+    driving = drive(
+        solution, tmp_path / "box", Limits(mission_seconds=seconds(15), stall_seconds=seconds(3))
+    )
     assert driving.score == 0
     assert driving.reasons == [STALLED]
 

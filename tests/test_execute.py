@@ -17,6 +17,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 
 import nbformat
 import pytest
+from pace import seconds as paced
 
 from autograder.execute import METADATA_KEY, NOT_RUN, ZYGOTE_VARIABLE
 
@@ -50,7 +51,7 @@ def _run(
     folder: Path,
     cells: Sequence[str],
     forked: bool = True,
-    seconds: int = 10,
+    seconds: int = paced(10),
     tests: Sequence[int] = (),
     backend: Optional[str] = "Agg",
 ) -> nbformat.NotebookNode:
@@ -182,8 +183,8 @@ def test_a_dead_kernel_marks_the_cells_after_it_not_run(tmp_path: Path, death: s
 
 def test_an_endless_cell_is_interrupted_and_the_next_one_runs(tmp_path: Path) -> None:
     cells = [FORKED, "while True:\n    pass", "print('after')"]
-    forked = _shape(_run(tmp_path, cells, seconds=2))
-    usual = _shape(_run(tmp_path, cells, seconds=2, forked=False))
+    forked = _shape(_run(tmp_path, cells, seconds=paced(2)))
+    usual = _shape(_run(tmp_path, cells, seconds=paced(2), forked=False))
     assert forked[0] == []
     assert ("error", "CellTimeoutError") in forked[1][1]
     assert forked[1][2] == [("stream", "after\n")]

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import nbformat
 import pytest
+from pace import seconds
 
 from autograder.bench import filled_notebook
 from autograder.cluster import dask_cluster
@@ -31,7 +32,7 @@ from autograder.sandbox import Limits
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(600)]
 
 ASSIGNMENT = "03_frames"
-LIMITS = Limits(cell_seconds=20, submission_seconds=120)
+LIMITS = Limits(cell_seconds=seconds(20), submission_seconds=seconds(120))
 
 
 def _class(folder: Path) -> Path:

@@ -7,6 +7,7 @@ import zipfile
 
 import nbformat
 import pytest
+from pace import seconds
 
 from autograder.course import ROOT, assignments
 from autograder.grade import find_submissions, read_submission
@@ -131,9 +132,9 @@ def test_a_cell_that_never_ends_is_interrupted_and_the_run_goes_on(tmp_path):
             nbformat.v4.new_code_cell("print('after')"),
         ],
     )
-    run = run_notebook(path, cell_seconds=3)
+    run = run_notebook(path, cell_seconds=seconds(3))
     assert [cell.error for cell in run.raised] == [
-        "CellTimeoutError: still running after the 3 s a cell may take"
+        f"CellTimeoutError: still running after the {seconds(3)} s a cell may take"
     ]
     assert run.stopped is None
 

@@ -15,6 +15,7 @@ import datetime
 import io
 import json
 import os
+import re
 import secrets
 import shutil
 import signal
@@ -28,6 +29,7 @@ from pathlib import Path
 from typing import Dict
 
 import pytest
+from pace import seconds
 
 from autograder.bench_hub import free_ports
 from autograder.course import ROOT
@@ -188,7 +190,10 @@ def klass(tmp_path_factory):
     ]
     roster.write_text("\n".join(rows) + "\n", encoding="utf-8")
     root = Path(tempfile.mkdtemp(prefix="duckie-hub-", dir="/srv"))
-    mode = ROOT.stat().st_mode & 0o7777
+    # Only solutions/ is closed: the rest of the repository stays as the other tests need it
+    # (the sandboxes and the nodes run as other users, and read the library and .venv).
+    solutions = ROOT / "solutions"
+    mode = solutions.stat().st_mode & 0o7777
     process = None
     try:
         done = _run(DUCKIE, "hub", "users", str(roster), "--instructor", names["prof"],
@@ -197,13 +202,13 @@ def klass(tmp_path_factory):
         passwords = dict(csv.reader(io.StringIO((root / "passwords.csv").read_text())))
         assert (root / "passwords.csv").stat().st_mode & 0o777 == 0o600
         # A repository every user can read is refused: its solutions/ holds the answers.
-        ROOT.chmod(mode | 0o005)
-        if reachable_by_others(ROOT / "solutions"):
+        solutions.chmod(mode | 0o005)
+        if reachable_by_others(solutions):
             refused = _run(DUCKIE, "hub", "start", "--hub", str(root), check=False)
             assert refused.returncode == 1
             assert "can read" in refused.stderr
             assert "chmod o-rwx" in refused.stderr
-        ROOT.chmod(mode & ~0o007)
+        solutions.chmod(mode & ~0o007)
         port = free_ports(4)
         log = here / "hub.log"
         with log.open("w") as output:
@@ -230,7 +235,7 @@ def klass(tmp_path_factory):
         for name in names.values():
             subprocess.run(["userdel", "--remove", name], check=False, capture_output=True)
         shutil.rmtree(root, ignore_errors=True)
-        ROOT.chmod(mode)
+        solutions.chmod(mode)
 
 
 def _login(browser, klass: Class, who: str):
@@ -238,12 +243,12 @@ def _login(browser, klass: Class, who: str):
         return klass.pages[who]
     context = browser.new_context(viewport={"width": 1400, "height": 900})
     page = context.new_page()
-    page.set_default_timeout(60_000)
+    page.set_default_timeout(seconds(60) * 1000)
     page.goto(f"{klass.url}/hub/login")
     page.fill("#username_input", klass.names[who])
     page.fill("#password_input", klass.passwords[klass.names[who]])
     page.click("#login_submit")
-    page.wait_for_selector("#jp-main-dock-panel", timeout=180_000)
+    page.wait_for_selector("#jp-main-dock-panel", timeout=seconds(180) * 1000)
     klass.pages[who] = page
     return page
 
@@ -272,12 +277,10 @@ def _type_into_notebook(page, klass: Class, who: str, code: str, answer: str) ->
     cell.locator(".cm-content").click()
     page.keyboard.press("Control+a")
     page.keyboard.insert_text(code)
-    written = page.locator(".jp-MarkdownCell", has_text=ANSWERS[who][:20])
-    cell = (
-        written.first
-        if written.count()
-        else page.locator(".jp-MarkdownCell", has_text="YOUR ANSWER HERE").first
-    )
+    # The answer cell: as released, or with this student's answer from an earlier visit (the
+    # notebook's cells may still be drawing, so both are waited for at once).
+    answered = re.compile(f"{re.escape(ANSWERS[who][:20])}|YOUR ANSWER HERE")
+    cell = page.locator(".jp-MarkdownCell", has_text=answered).first
     cell.scroll_into_view_if_needed()
     cell.dblclick()
     cell.locator(".cm-content").click()
@@ -286,9 +289,9 @@ def _type_into_notebook(page, klass: Class, who: str, code: str, answer: str) ->
     page.keyboard.press("Shift+Enter")
     page.keyboard.press("Control+s")
     home = Path("/home") / klass.names[who]
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + seconds(30)
     while code.strip() not in _cell(home / NOTEBOOK, "robot_topic"):
-        assert time.monotonic() < deadline, f"{who}'s notebook was not saved within 30 s"
+        assert time.monotonic() < deadline, f"{who}'s notebook was not saved in time"
         time.sleep(0.5)
 
 
@@ -308,7 +311,7 @@ def _submit(page, times: int) -> None:
     row = page.locator("#fetched_assignments_list .list_item", has_text=ASSIGNMENT).first
     row.locator("button", has_text="Submit").click()
     submitted = page.locator("#submitted_assignments_list .list_item", has_text=ASSIGNMENT)
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + seconds(60)
     while page.locator("#submitted_assignments_list").inner_text().count("UTC") < times:
         assert time.monotonic() < deadline, "the submission did not show in the list"
         time.sleep(0.5)
@@ -318,13 +321,14 @@ def _submit(page, times: int) -> None:
 def _feedback_page(page) -> str:
     """Fetch Feedback in the Assignment List, open the page it gives, and read it."""
     _assignment_list(page)
-    row = page.locator("#submitted_assignments_list .list_item", has_text=ASSIGNMENT).first
-    row.locator("button", has_text="Fetch Feedback").click()
+    # The list was drawn before the feedback was returned: ask it again, as a student does.
+    page.locator("#refresh_assignments_list").click()
+    page.locator("#submitted_assignments_list button", has_text="Fetch Feedback").first.click()
     link = page.locator("#submitted_assignments_list a", has_text="view feedback").first
     link.wait_for()
     link.click()
     page.locator(".jp-DirListing-item", has_text=f"{ASSIGNMENT}.html").dblclick()
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + seconds(60)
     while True:
         frames = [frame for frame in page.frames if frame != page.main_frame]
         for frame in frames:

@@ -16,6 +16,7 @@ from pathlib import Path
 import nbformat
 import pytest
 from cases import ASSIGNMENT, CASES, FULL_MARKS, expected_loss
+from pace import seconds
 
 from autograder.bench import filled_notebook
 from autograder.course import ROOT
@@ -84,7 +85,7 @@ def graded(sandbox, tmp_path_factory):
         submissions,
         out,
         jobs=2,
-        limits=Limits(cell_seconds=5, submission_seconds=90, processes=64),
+        limits=Limits(cell_seconds=seconds(5), submission_seconds=seconds(90), processes=64),
         names=[ASSIGNMENT],
         driving=False,
     )
@@ -148,7 +149,10 @@ def test_a_folder_name_nbgrader_cannot_take_is_graded_under_an_id_and_shown_as_w
         ("malformed", "not a readable notebook"),
         ("empty", "no 03_frames.ipynb"),
         ("sys_exit", "SystemExit"),
-        ("infinite_loop", "CellTimeoutError: still running after the 5 s a cell may take"),
+        (
+            "infinite_loop",
+            f"CellTimeoutError: still running after the {seconds(5)} s a cell may take",
+        ),
         ("raises_outside_tests", "NameError"),
         ("write_outside", "03_frames: the notebook tried to write outside the student's folders: "),
     ],

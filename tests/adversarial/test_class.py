@@ -28,6 +28,7 @@ import shutil
 import nbformat
 import pytest
 from cases import FORGES_THE_DRIVE
+from pace import seconds
 
 from autograder.bench import filled_course
 from autograder.course import ROOT
@@ -37,6 +38,8 @@ from autograder.sandbox import Limits
 pytestmark = [pytest.mark.slow, pytest.mark.timeout(900)]
 
 GRADED = ["03_frames", "11_to_the_robot"]
+#: The limits a cell and a mission have here: tight, so that a hang costs little waiting.
+CELL, MISSION = seconds(15), seconds(20)
 
 
 LINK_FARM = """\
@@ -95,7 +98,7 @@ def graded(sandbox, tmp_path_factory):
         out,
         jobs=2,
         names=GRADED,
-        limits=Limits(cell_seconds=15, submission_seconds=300, mission_seconds=20),
+        limits=Limits(cell_seconds=CELL, submission_seconds=seconds(300), mission_seconds=MISSION),
     )
     return {result.student: result for result in results}, out
 
@@ -159,19 +162,20 @@ def test_code_that_hangs_on_import_is_stopped_and_reported(graded):
     assert _lost(stuck) == []
     assert stuck.driving_score == 0
     first, *others = stuck.missions.values()
-    assert first.reasons == ["The mission did not end within 20 s of wall time."]
+    assert first.reasons == [f"The mission did not end within {MISSION} s of wall time."]
     assert [driving.reasons for driving in others] == [
         [
-            "Not driven: the square_then_circle mission did not end within 20 s of wall time, "
-            "and the same nodes drive this one."
+            "Not driven: the square_then_circle mission did not end within "
+            f"{MISSION} s of wall time, and the same nodes drive this one."
         ]
     ] * 3
     # Notebook 11 loads the student's solution too: its cells that import it run out of time.
     timeouts, driving = stuck.problems
     assert timeouts.startswith("11_to_the_robot: 6 cells outside the tests raised: cell 4 (mine")
-    assert "CellTimeoutError: still running after the 15 s a cell may take" in timeouts
+    assert f"CellTimeoutError: still running after the {CELL} s a cell may take" in timeouts
     assert (
-        driving == "Driving: the square_then_circle mission did not end within 20 s of wall time."
+        driving
+        == f"Driving: the square_then_circle mission did not end within {MISSION} s of wall time."
     )
 
 
