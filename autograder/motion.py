@@ -30,7 +30,7 @@ from duckielib.bags.behaviour import (
     MissionReport,
     StateRun,
 )
-from duckielib.bags.io import Bag, PathLike
+from duckielib.bags.reader import Bag, PathLike
 from duckielib.missions import (
     Arc,
     Mission,

@@ -181,7 +181,12 @@ EDGES = {
     "pymunk": ("duckielib/sim/",),
     # io.py reads and writes ROS 1 bags through rosbags (and its seam); convert.py hands the
     # other formats (ROS 2 bags, CDR) to rosbags' public converter.
-    "rosbags": ("duckielib/bags/io.py", "duckielib/bags/convert.py"),
+    "rosbags": (
+        "duckielib/bags/seam.py",
+        "duckielib/bags/reader.py",
+        "duckielib/bags/writer.py",
+        "duckielib/bags/convert.py",
+    ),
     "matplotlib": ("duckielib/plots/", "duckielib/sim/examples/"),
     "foxglove": ("duckielib/sim/live.py",),
 }

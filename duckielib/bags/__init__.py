@@ -7,7 +7,10 @@ MCAP files and ROS 2 bag folders, as a ROS 1 copy made once; :func:`convert_bag`
 as MCAP or a ROS 2 bag, for today's viewers.
 
 Modules (one idea each):
-    io: :class:`Bag` (read) and :class:`BagWriter` (write, uncompressed or BZ2).
+    reader: :class:`Bag`, a bag opened for reading, every record checked.
+    writer: :class:`BagWriter`, a bag written whole (uncompressed or BZ2).
+    seam: the only code relying on rosbags' internals, checked at first use; the course's
+        types as a rosbags typestore.
     recorder: :class:`BagRecorder`, ``rosbag record`` for the in-process graph.
     repair: :func:`repair_bag`, every complete message of a killed recording.
     records: the bag's records in file order, even from a damaged file.
@@ -49,10 +52,12 @@ from duckielib.bags.analysis import (
     replay_odometry,
 )
 from duckielib.bags.convert import convert_bag
-from duckielib.bags.io import Bag, BagMessage, BagWriter, TopicInfo, course_typestore
+from duckielib.bags.reader import Bag, BagMessage, TopicInfo
 from duckielib.bags.recorder import BagRecorder, record
 from duckielib.bags.repair import RepairReport, repair_bag
 from duckielib.bags.samples import SAMPLES, sample_bag
+from duckielib.bags.seam import course_typestore
+from duckielib.bags.writer import BagWriter
 
 __all__ = [
     "convert_bag",

@@ -29,7 +29,7 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from duckielib import messages as course_messages
-from duckielib.bags.io import Bag, BagMessage, PathLike, TopicInfo
+from duckielib.bags.reader import Bag, BagMessage, PathLike, TopicInfo
 from duckielib.config import DB21
 from duckielib.errors import BagError, MessageDefinitionError, UnknownTypeError
 from duckielib.messages.spec import PRIMITIVE_TYPES, MessageSpec, parse_message

@@ -21,7 +21,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 import numpy as np
 
 from duckielib.bags.analysis import PoseTrack, pose_tracks
-from duckielib.bags.io import Bag, PathLike
+from duckielib.bags.reader import Bag, PathLike
 from duckielib.leds import named_pattern
 from duckielib.missions import Mission, Pose
 from duckielib.rostime import NS_PER_S

@@ -34,8 +34,9 @@ from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional, Set, Tuple
 
 from duckielib.bags import records
-from duckielib.bags.io import TO_ROS1, Bag, BagWriter, PathLike
+from duckielib.bags.reader import TO_ROS1, Bag, PathLike
 from duckielib.bags.viewers import ViewerPoses
+from duckielib.bags.writer import BagWriter
 from duckielib.errors import BagError
 from duckielib.rostime import NS_PER_S
 

@@ -31,7 +31,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable, Deque, Dict, Iterable, List, Optional, Tuple
 
-from duckielib.bags.io import BagWriter, PathLike, uninterrupted
+from duckielib.bags.writer import BagWriter, PathLike, uninterrupted
 from duckielib.errors import BagError
 from duckielib.ros import names
 from duckielib.ros.context import node_context

@@ -17,7 +17,8 @@ chunk info  0x06   a chunk's position, time range and message counts by connecti
 Reading in file order needs no index, so this module reads what a killed recorder left
 behind (:mod:`duckielib.bags.repair`), and it is the fast path for reading many small
 messages: rosbags reads a message through the index in about 10 microseconds, this in
-about 2. Bags are still opened, checked and written with rosbags (:mod:`duckielib.bags.io`).
+about 2. Bags are still opened, checked and written with rosbags
+(:mod:`duckielib.bags.reader`, :mod:`duckielib.bags.writer`).
 
 Damage. Every record header is checked as it is read: its fields parse, its kind is known
 (inside a chunk only messages and connections belong), it has the fields its kind needs, and

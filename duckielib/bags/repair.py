@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Dict, List, Optional
 
 from duckielib.bags import records
-from duckielib.bags.io import BagWriter, PathLike
+from duckielib.bags.writer import BagWriter, PathLike
 from duckielib.errors import BagError
 from duckielib.rostime import NS_PER_S
 

@@ -42,9 +42,10 @@ from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple, Union
 
 from duckielib.bags import records
-from duckielib.bags.io import COMPRESSIONS, BagWriter, TopicInfo
-from duckielib.bags.io import Bag as CourseBag
+from duckielib.bags.reader import Bag as CourseBag
+from duckielib.bags.reader import TopicInfo
 from duckielib.bags.repair import copy_scanned
+from duckielib.bags.writer import COMPRESSIONS, BagWriter
 from duckielib.errors import BagError, UnknownTypeError
 from duckielib.messages import get_message_class
 from duckielib.ros import rospy

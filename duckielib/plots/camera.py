@@ -23,7 +23,7 @@ from duckielib.plots.player import image_topic, playing_widget
 from duckielib.rostime import NS_PER_S
 
 if TYPE_CHECKING:
-    from duckielib.bags.io import Bag
+    from duckielib.bags.reader import Bag
     from duckielib.ros.graph import Graph
 
 __all__ = ["ImageView"]

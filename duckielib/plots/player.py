@@ -42,7 +42,7 @@ if TYPE_CHECKING:
     from matplotlib.animation import FuncAnimation
     from matplotlib.artist import Artist
 
-    from duckielib.bags.io import Bag
+    from duckielib.bags.reader import Bag
     from duckielib.sim.simulator import Simulator
 
 __all__ = ["Recording", "RunPlayer"]

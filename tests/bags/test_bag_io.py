@@ -7,7 +7,7 @@ from bagtools import LEFT, encoder, write_encoders
 from rosbags.rosbag1 import Reader
 
 from duckielib.bags import Bag, BagWriter, course_typestore
-from duckielib.bags.io import rosbags_type
+from duckielib.bags.seam import rosbags_type
 from duckielib.errors import BagError
 from duckielib.messages import LEDPattern, Pose2DStamped, String
 

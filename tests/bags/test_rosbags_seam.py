@@ -11,9 +11,9 @@ from bagtools import LEFT, encoder
 from rosbags.rosbag1 import Reader, Writer
 
 from duckielib.bags import Bag, BagWriter
-from duckielib.bags import io as bag_io
-from duckielib.bags.io import ROSBAGS_CHECKED, RosbagsSeam
+from duckielib.bags import seam as bag_seam
 from duckielib.bags.records import scan
+from duckielib.bags.seam import ROSBAGS_CHECKED, RosbagsSeam
 from duckielib.errors import BagError
 
 VERSION = metadata.version("rosbags")
@@ -36,7 +36,7 @@ def _several_chunks(path):
 
 def _assert_names(message, missing, action="write"):
     assert message.startswith(f"duckielib cannot {action} bags with rosbags {VERSION}: ")
-    assert f"it lacks {missing}, which duckielib.bags.io relies on" in message
+    assert f"it lacks {missing}, which duckielib.bags.seam relies on" in message
     assert message.endswith(
         f"install rosbags=={ROSBAGS_CHECKED[-1]} "
         f"(duckielib was checked with rosbags {', '.join(ROSBAGS_CHECKED)})."
@@ -45,7 +45,7 @@ def _assert_names(message, missing, action="write"):
 
 def test_the_installed_rosbags_is_one_the_seam_was_checked_with():
     assert VERSION in ROSBAGS_CHECKED, (
-        f"rosbags {VERSION} is installed, but the seam in duckielib/bags/io.py was checked with "
+        f"rosbags {VERSION} is installed, but the seam in duckielib/bags/seam.py was checked with "
         f"rosbags {', '.join(ROSBAGS_CHECKED)}: check what RosbagsSeam relies on against the "
         "new version, then add it to ROSBAGS_CHECKED."
     )
@@ -53,7 +53,7 @@ def test_the_installed_rosbags_is_one_the_seam_was_checked_with():
 
 def test_the_installed_rosbags_has_what_the_writer_side_relies_on(unchecked, tmp_path):
     probe = tmp_path / "probe.bag"
-    assert bag_io._missing_from_writer(probe) == []
+    assert bag_seam._missing_from_writer(probe) == []
     writer = Writer(probe)
     chunk = writer.chunks[-1]
     assert isinstance(writer.chunk_threshold, int)
@@ -120,7 +120,7 @@ def test_a_rosbags_writing_other_bytes_is_refused(unchecked, monkeypatch, tmp_pa
         BagWriter(tmp_path / "run.bag")
     assert str(caught.value) == (
         f"duckielib cannot write bags with rosbags {VERSION}: its Writer.write writes other "
-        f"bytes than duckielib.bags.io does; install rosbags=={ROSBAGS_CHECKED[-1]} "
+        f"bytes than duckielib.bags.seam does; install rosbags=={ROSBAGS_CHECKED[-1]} "
         f"(duckielib was checked with rosbags {', '.join(ROSBAGS_CHECKED)})."
     )
 

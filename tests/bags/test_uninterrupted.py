@@ -8,7 +8,7 @@ import signal
 import pytest
 
 from duckielib.bags import Bag, BagWriter
-from duckielib.bags.io import uninterrupted
+from duckielib.bags.writer import uninterrupted
 from duckielib.messages import String
 
 
