@@ -6,9 +6,11 @@ Run it from the repository's root to see the structure::
 
 A module's imports are read from its source with :mod:`ast`, never by importing it. An import
 at a module's top level is an arrow that holds as soon as the module loads; one inside a
-function (a lazy import) is listed apart, since it only holds when that function runs. A circle
-is a set of modules that reach each other through top-level arrows. The tests
-(``tests/test_purity.py``) use :func:`graph` to keep the arrows the way they should point.
+function (a lazy import) is listed apart, since it only holds when that function runs; so is a
+module named in a string for ``importlib.import_module`` or ``__import__``. A circle is a set
+of modules that reach each other through top-level arrows. The tests (``tests/test_purity.py``)
+use :func:`graph` to keep the arrows the way they should point. The report also names the
+modules and functions over the house's limits (:data:`MODULE_LINES`, :data:`FUNCTION_LINES`).
 """
 
 from __future__ import annotations
@@ -22,6 +24,10 @@ from typing import Dict, List, Set
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("duckielib", "autograder")
+#: The house's limits: longer modules and functions say at their top why they are so long.
+MODULE_LINES, FUNCTION_LINES = 600, 80
+#: The calls that import a module named in a string.
+_BY_NAME = {"import_module", "__import__"}
 
 
 @dataclass
@@ -32,15 +38,19 @@ class Graph:
     top: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
     lazy: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
     typing: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
+    named: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
+    #: ``module:Class.function`` -> its lines.
+    functions: Dict[str, int] = field(default_factory=dict)
 
     def circles(self, every: bool = False) -> List[List[str]]:
         """The sets of modules that import each other, largest first.
 
         Args:
-            every: count lazy imports and those for type hints only too, not just the top level.
+            every: count lazy imports, those for type hints only and modules named for
+                importlib too, not just the top level.
         """
         edges: Dict[str, Set[str]] = defaultdict(set)
-        for kinds in (self.top, self.lazy, self.typing) if every else (self.top,):
+        for kinds in (self.top, self.lazy, self.typing, self.named) if every else (self.top,):
             for module, imported in kinds.items():
                 edges[module] |= imported
         index: Dict[str, int] = {}
@@ -75,7 +85,8 @@ class Graph:
     def arrows(self, source: str, target: str) -> List[str]:
         """Every import from a module under ``source`` to one under ``target``, of any kind."""
         said = []
-        for kind, edges in (("top", self.top), ("lazy", self.lazy), ("typing", self.typing)):
+        kinds = ("top", self.top), ("lazy", self.lazy), ("typing", self.typing)
+        for kind, edges in (*kinds, ("by name", self.named)):
             for module, imported in sorted(edges.items()):
                 if _under(module, source):
                     said += [f"{module} -> {other} ({kind})" for other in sorted(imported)
@@ -115,22 +126,15 @@ def graph() -> Graph:
         tree = ast.parse(text, str(path))
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
         top_level = set(map(id, tree.body))
+        _count_functions(tree, module, result.functions)
         for node in ast.walk(tree):
-            names: List[str] = []
-            if isinstance(node, ast.Import):
-                names = [alias.name for alias in node.names]
-            elif isinstance(node, ast.ImportFrom):
-                base = node.module or ""
-                if node.level:
-                    parent = package.split(".")[: len(package.split(".")) - node.level + 1]
-                    base = ".".join(parent + ([base] if base else []))
-                # A name that is a module is an arrow to it; any other name, to its module.
-                names = [
-                    f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base
-                    for alias in node.names
-                ]
-            else:
+            named = _named_module(node)
+            if named is not None:
+                target = _resolve(named, known)
+                if target is not None and target != module:
+                    result.named[module].add(target)
                 continue
+            names = _imported_names(node, package, known)
             guarded = isinstance(node, ast.ImportFrom) and node.module == "__future__"
             for name in names:
                 target = _resolve(name, known)
@@ -145,6 +149,46 @@ def graph() -> Graph:
     return result
 
 
+def _imported_names(node: ast.AST, package: str, known: Set[str]) -> List[str]:
+    """The modules an import statement names (none for any other node)."""
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    if not isinstance(node, ast.ImportFrom):
+        return []
+    base = node.module or ""
+    if node.level:
+        parent = package.split(".")[: len(package.split(".")) - node.level + 1]
+        base = ".".join(parent + ([base] if base else []))
+    # A name that is a module is an arrow to it; any other name, to its module.
+    return [
+        f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base for alias in node.names
+    ]
+
+
+def _named_module(node: ast.AST) -> str | None:
+    """The module a call ``import_module("x")`` or ``__import__("x")`` names, if a constant."""
+    if not isinstance(node, ast.Call) or not node.args:
+        return None
+    function = node.func
+    name = function.attr if isinstance(function, ast.Attribute) else getattr(function, "id", "")
+    argument = node.args[0]
+    if name in _BY_NAME and isinstance(argument, ast.Constant) and isinstance(argument.value, str):
+        return argument.value
+    return None
+
+
+def _count_functions(tree: ast.AST, module: str, found: Dict[str, int], prefix: str = "") -> None:
+    """Each function's and method's lines (decorators left out), by ``module:Class.name``."""
+    for node in ast.iter_child_nodes(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            found[f"{module}:{prefix}{node.name}"] = node.end_lineno - node.lineno + 1
+            _count_functions(node, module, found, f"{prefix}{node.name}.")
+        elif isinstance(node, ast.ClassDef):
+            _count_functions(node, module, found, f"{prefix}{node.name}.")
+        else:
+            _count_functions(node, module, found, prefix)
+
+
 def _in_type_checking(tree: ast.Module, node: ast.AST) -> bool:
     """Whether ``node`` sits in a top-level ``if TYPE_CHECKING:`` block (no arrow at run time)."""
     return any(
@@ -153,6 +197,21 @@ def _in_type_checking(tree: ast.Module, node: ast.AST) -> bool:
         and any(node is inner for inner in ast.walk(statement))
         for statement in tree.body
     )
+
+
+def robot_to_laptop(found: Graph) -> List[str]:
+    """Every import, of any kind, from a module deployed to the robot to a laptop package."""
+    from duckielib.tools.deploy import LAPTOP_PACKAGES
+
+    laptop = [f"duckielib.{package}" for package in LAPTOP_PACKAGES]
+    said = []
+    for package in laptop:
+        said += [
+            arrow
+            for arrow in found.arrows("duckielib", package)
+            if not any(_under(arrow.split(" -> ")[0], other) for other in laptop)
+        ]
+    return sorted(said)
 
 
 def report(found: Graph) -> str:
@@ -172,6 +231,21 @@ def report(found: Graph) -> str:
     upward = found.arrows("duckielib", "autograder")
     lines.append(f"arrows from duckielib to autograder: {len(upward)}")
     lines += [f"  {arrow}" for arrow in upward]
+    robot = robot_to_laptop(found)
+    lines.append(f"arrows from the robot's modules to the laptop's packages: {len(robot)}")
+    lines += [f"  {arrow}" for arrow in robot]
+    long_modules = sorted(
+        (module for module, count in found.lines.items() if count > MODULE_LINES),
+        key=lambda module: -found.lines[module],
+    )
+    lines.append(f"modules over {MODULE_LINES} lines: {len(long_modules)}")
+    lines += [f"  {module:40s} {found.lines[module]:6d}" for module in long_modules]
+    long_functions = sorted(
+        (name for name, count in found.functions.items() if count > FUNCTION_LINES),
+        key=lambda name: -found.functions[name],
+    )
+    lines.append(f"functions over {FUNCTION_LINES} lines: {len(long_functions)}")
+    lines += [f"  {name:64s} {found.functions[name]:4d}" for name in long_functions]
     return "\n".join(lines)
 
 

@@ -246,3 +246,47 @@ def test_no_modules_import_each_other():
     assert found.circles() == []
     # Counting lazy imports and those for type hints too: every arrow points one way.
     assert found.circles(every=True) == []
+
+
+def test_no_robot_module_reaches_a_laptop_package_in_any_way():
+    # Not at load, not lazily, not for types, not by a name handed to importlib: the laptop's
+    # libraries (cv_bridge, rosbag...) register in the entry point group the robot's code
+    # reads (pyproject.toml), so the arrow points from the laptop to the robot.
+    from import_graph import graph, robot_to_laptop
+
+    assert robot_to_laptop(graph()) == []
+
+
+def test_the_import_graph_sees_a_module_named_for_importlib():
+    import ast
+
+    from import_graph import _named_module
+
+    calls = [
+        'importlib.import_module("duckielib.libraries")',
+        'import_module("duckielib.libraries.tf")',
+        '__import__("duckielib.bags")',
+        "importlib.import_module(name)",  # not a constant: nothing to follow
+        'print("duckielib.bags")',
+    ]
+    found = [_named_module(ast.parse(call, mode="eval").body) for call in calls]
+    assert found == ["duckielib.libraries", "duckielib.libraries.tf", "duckielib.bags", None, None]
+
+
+def test_the_served_libraries_are_the_ones_pyproject_registers():
+    from importlib.metadata import entry_points
+
+    from duckielib.libraries.duckietown_utils import DUCKIETOWN_UTILS_MODULES
+
+    registered = {
+        entry.name: entry.value for entry in entry_points(group="duckielib.ros_libraries")
+    }
+    libraries = sorted(
+        path.stem for path in (ROOT / "duckielib" / "libraries").glob("*.py") if path.stem[0] != "_"
+    )
+    assert sorted({value.split(":")[0].rpartition(".")[2] for value in registered.values()}) == (
+        libraries
+    )
+    assert {name for name in registered if name.startswith("duckietown_utils.")} == {
+        f"duckietown_utils.{name}" for name in DUCKIETOWN_UTILS_MODULES
+    }

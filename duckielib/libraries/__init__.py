@@ -20,46 +20,10 @@ in ``duckie mission``:
 - :mod:`~duckielib.libraries.duckietown_utils`: the helpers of Duckietown's library that nodes
   use most (the robot's name, YAML files, camera messages and JPEG bytes to pixels).
 
-They are served by name only where no real one is installed: :data:`MODULES` says which
-module stands for which name. Importing this package imports none of them (nor OpenCV).
+They are served by name only where no real one is installed. Each registers the names it
+stands for in the entry point group ``duckielib.ros_libraries`` of ``pyproject.toml``, which
+:mod:`duckielib.ros.modules` reads: the robot's code never names this laptop package.
+Importing this package imports none of them (nor OpenCV).
 
 Laptop side; never deployed.
 """
-
-from __future__ import annotations
-
-from typing import Dict
-
-__all__ = ["MODULES"]
-
-#: Modules of Duckietown's library that nodes import helpers from (``duckietown_utils.jpg``):
-#: :mod:`.duckietown_utils` stands for each.
-DUCKIETOWN_UTILS_MODULES = (
-    "jpg",
-    "yaml_wrap",
-    "image_conversions",
-    "file_utils",
-    "exceptions",
-    "exception_utils",
-)
-
-#: The names robot code imports, each with the module of this package that stands for it.
-#: A dotted name is a submodule robot code also imports (``from rosbag.bag import Bag``):
-#: the same module as its package's, or one its package's module holds as an attribute
-#: (``tf.transformations``).
-MODULES: Dict[str, str] = {
-    "cv_bridge": "duckielib.libraries.cv_bridge",
-    "cv_bridge.core": "duckielib.libraries.cv_bridge",
-    "rosbag": "duckielib.libraries.rosbag",
-    "rosbag.bag": "duckielib.libraries.rosbag",
-    "message_filters": "duckielib.libraries.message_filters",
-    "tf": "duckielib.libraries.tf",
-    "tf.transformations": "duckielib.libraries.tf.transformations",
-    "tf2_ros": "duckielib.libraries.tf2_ros",
-    "duckietown_utils": "duckielib.libraries.duckietown_utils",
-    # The library's own modules, where nodes import its helpers from (one module here).
-    **{
-        f"duckietown_utils.{name}": "duckielib.libraries.duckietown_utils"
-        for name in DUCKIETOWN_UTILS_MODULES
-    },
-}

@@ -28,7 +28,16 @@ from typing import Any, Optional
 
 import numpy as np
 
-from duckielib.libraries import DUCKIETOWN_UTILS_MODULES
+#: Modules of Duckietown's library that nodes import helpers from (``duckietown_utils.jpg``):
+#: this module stands for each (their names are registered in ``pyproject.toml`` too).
+DUCKIETOWN_UTILS_MODULES = (
+    "jpg",
+    "yaml_wrap",
+    "image_conversions",
+    "file_utils",
+    "exceptions",
+    "exception_utils",
+)
 
 __all__ = [
     "DTBadData",

@@ -1,8 +1,9 @@
 """Make robot code's imports (``import rospy``, ``from std_msgs.msg import String``...) work.
 
 The names served: ``rospy``, ``duckietown.dtros``, every message package of
-:mod:`duckielib.messages`, and on the laptop the libraries of :mod:`duckielib.libraries`
-(``cv_bridge``, ``rosbag``, ``message_filters``, ``tf``, ``tf2_ros``).
+:mod:`duckielib.messages`, and on the laptop the libraries registered in the entry point group
+``duckielib.ros_libraries`` (``cv_bridge``, ``rosbag``, ``message_filters``, ``tf``,
+``tf2_ros``: :mod:`duckielib.libraries`).
 
 Code written for a Duckiebot imports rospy, the message packages and Duckietown's ``DTROS``
 by their usual names. Once :mod:`duckielib.ros` is imported, those names resolve to the
@@ -27,7 +28,7 @@ import importlib.machinery
 import sys
 import types
 from pathlib import Path
-from typing import Callable, Dict, Iterator, List, Optional, Sequence, Union
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Union
 
 from duckielib import messages
 from duckielib.ros import dtros, rospy
@@ -74,23 +75,29 @@ def _aliases() -> Dict[str, Dict[str, types.ModuleType]]:
     return found
 
 
-_LIBRARIES: Dict[str, Dict[str, str]] = {}
+#: The entry point group the libraries served besides rospy register in (pyproject.toml).
+LIBRARIES_GROUP = "duckielib.ros_libraries"
+
+_LIBRARIES: Dict[str, Dict[str, Any]] = {}
 
 
-def _library_modules() -> Dict[str, str]:
+def _library_modules() -> Dict[str, Any]:
     """The ROS libraries served besides rospy (``cv_bridge``, ``rosbag``, ``tf``...).
 
-    Import name -> the module of :mod:`duckielib.libraries` that stands for it. They live on
-    the laptop only: where this copy of duckielib has no such package (on a robot, which has
-    the real ones) this is empty.
+    Import name -> the entry point that loads the module standing for it. The libraries live
+    on the laptop and register themselves in the entry point group :data:`LIBRARIES_GROUP`
+    of the installed course (``pyproject.toml``); this module never names them. On a robot,
+    which has the real ones and whose copy of duckielib is not installed, there are none.
     """
     if "modules" not in _LIBRARIES:
-        beside = Path(__file__).resolve().parents[1] / "libraries" / "__init__.py"
-        if beside.is_file():
-            libraries = importlib.import_module("duckielib.libraries")
-            _LIBRARIES["modules"] = dict(libraries.MODULES)
-        else:
-            _LIBRARIES["modules"] = {}
+        from importlib import metadata
+
+        found = metadata.entry_points()
+        if hasattr(found, "select"):  # Python 3.10 and later
+            entries = found.select(group=LIBRARIES_GROUP)
+        else:  # Python 3.8 and 3.9: a dict of groups
+            entries = found.get(LIBRARIES_GROUP, ())  # type: ignore[attr-defined]
+        _LIBRARIES["modules"] = {entry.name: entry for entry in entries}
     return _LIBRARIES["modules"]
 
 
@@ -208,10 +215,10 @@ class RobotImports(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         top = module.__name__.partition(".")[0]
         libraries = _library_modules()
         if module.__name__ in libraries:
-            for name, path in libraries.items():  # rosbag, and rosbag.bag with it
+            for name, entry in libraries.items():  # rosbag, and rosbag.bag with it
                 same_top = name.partition(".")[0] == top
                 if same_top and (name == module.__name__ or name not in sys.modules):
-                    sys.modules[name] = importlib.import_module(path)
+                    sys.modules[name] = entry.load()
             return
         if top not in _SERVED:
             return  # a package folder of one's own: its __path__ is all it needs
