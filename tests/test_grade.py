@@ -154,7 +154,7 @@ def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
         submissions,
         tmp_path / "out",
         jobs=2,
-        limits=Limits(cell_seconds=seconds(5), submission_seconds=seconds(120)),
+        limits=Limits(cell_seconds=seconds(15), submission_seconds=seconds(120)),
         names=[ASSIGNMENT],
         progress=lines.append,
     )

@@ -85,7 +85,7 @@ def graded(sandbox, tmp_path_factory):
         submissions,
         out,
         jobs=2,
-        limits=Limits(cell_seconds=seconds(5), submission_seconds=seconds(90), processes=64),
+        limits=Limits(cell_seconds=seconds(15), submission_seconds=seconds(90), processes=64),
         names=[ASSIGNMENT],
         driving=False,
     )
@@ -151,7 +151,7 @@ def test_a_folder_name_nbgrader_cannot_take_is_graded_under_an_id_and_shown_as_w
         ("sys_exit", "SystemExit"),
         (
             "infinite_loop",
-            f"CellTimeoutError: still running after the {seconds(5)} s a cell may take",
+            f"CellTimeoutError: still running after the {seconds(15)} s a cell may take",
         ),
         ("raises_outside_tests", "NameError"),
         ("write_outside", "03_frames: the notebook tried to write outside the student's folders: "),
