@@ -28,8 +28,8 @@ from typing import Any
 __all__ = ["POLICY", "protect"]
 
 #: Formgrader's own inline event handlers (its templates' ``onclick``), allowed by their hash:
-#: these five exact texts run, no other handler does (``tests/test_formgrade_safety.py`` reads
-#: them out of nbgrader's templates).
+#: these five exact texts run, no other handler does
+#: (``tests/autograder/test_formgrade_safety.py`` reads them out of nbgrader's templates).
 OWN_HANDLERS = (
     "toggle_name(true);",
     "toggle_name(false);",

@@ -23,7 +23,7 @@ from autograder.execute import METADATA_KEY, NOT_RUN, ZYGOTE_VARIABLE
 
 pytestmark = pytest.mark.notebook
 
-EXECUTE = Path(__file__).resolve().parents[1] / "autograder" / "execute.py"
+EXECUTE = Path(__file__).resolve().parents[2] / "autograder" / "execute.py"
 #: Printed by a first cell: whether the kernel was forked (the zygote imported duckielib.plots).
 FORKED = "import sys\nprint('duckielib.plots' in sys.modules)"
 DIED = "the kernel died"

@@ -27,7 +27,7 @@ from duckielib.missions import MISSIONS
 from duckielib.solution import SolutionError, export_solution, reference_solution_dir
 from duckielib.tools.deploy import prepare, robot_module_files
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PROJECT = ROOT / "robot_nodes"
 PACKAGE = PROJECT / "packages" / "course_nodes"
 LAUNCH = PACKAGE / "launch"

@@ -247,7 +247,7 @@ def test_unknown_choices_are_refused_before_anything_runs(reference, tmp_path):
 
 
 def test_the_command_line_runs_the_mission_and_refuses_an_unfinished_course(tmp_path):
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     done = subprocess.run(
         [sys.executable, "-m", "duckielib.tools.cli", "mission", "--out", str(tmp_path / "run")],
         capture_output=True,
