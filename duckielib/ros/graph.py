@@ -25,18 +25,17 @@ so does a notebook that calls ``rospy.init_node`` and then ``rospy.sleep``.
 from __future__ import annotations
 
 import contextlib
-import ctypes
 import heapq
 import itertools
 import sys
 import threading
-import time
 from typing import Any, Callable, Dict, List, Optional, TextIO, Tuple
 
 from duckielib.errors import DuckielibError
 from duckielib.ros import context, names
-from duckielib.ros.exceptions import ROSException, ROSInterruptException
-from duckielib.ros.log import ERROR, INFO, LogRecord, format_error
+from duckielib.ros.actors import Actor, Event, Signal, Stalled, ThreadActor, parked, watchdog
+from duckielib.ros.exceptions import ROSException
+from duckielib.ros.log import INFO, LogRecord
 from duckielib.ros.node import ConnectionHistory, Node, ServiceRecord, TopicRecord
 from duckielib.ros.params import ParameterServer
 from duckielib.rostime import NS_PER_S
@@ -51,11 +50,6 @@ __all__ = ["Graph", "NodeCrashed", "current_graph", "default_graph"]
 #: How many times a node may be resumed after shutdown before the graph gives up on it.
 _SHUTDOWN_PATIENCE = 1000
 
-#: Launched nodes' greenlets that have started and not finished. Kept alive so that a graph
-#: dropped without a shutdown leaves its nodes parked for good, as threads would be, instead
-#: of running their clean-up code at some garbage collection.
-_parked: set = set()
-
 
 class NodeCrashed(DuckielibError):
     """A node's code raised an exception; the node was shut down.
@@ -68,243 +62,6 @@ class NodeCrashed(DuckielibError):
     def __init__(self, message: str, node: str = "") -> None:
         super().__init__(message)
         self.node = node
-
-
-class _Stalled(BaseException):
-    """Raised in a node's code that held the baton too long.
-
-    Not an ``Exception``, so that ``except Exception`` in the node's loop does not swallow it.
-    """
-
-
-class _Watchdog:
-    """Stops a node's code that runs for too long on the wall clock without ever waiting.
-
-    Simulated time moves only while every node waits, so a loop that waits for something
-    without calling rospy (``while not self.got_message: pass``) would freeze the graph for
-    ever, silently. The watchdog, a daemon thread, checks twice a second which node holds
-    the baton; after ``graph.stall_limit`` real seconds it says so in the node's log and
-    raises an exception in the node's code, which stops the node with a sentence saying why.
-    """
-
-    def __init__(self) -> None:
-        self.lock = threading.Lock()
-        #: graph -> (actor, the thread its code runs in, when it took the baton, warned)
-        self.holding: Dict[Any, List[Any]] = {}
-        self.thread: Optional[threading.Thread] = None
-
-    def hold(self, graph: Graph, actor: _Actor, thread_id: int) -> None:
-        with self.lock:
-            self.holding[graph] = [actor, thread_id, time.monotonic(), False]
-            if self.thread is None:
-                self.thread = threading.Thread(target=self._watch, name="graph-watchdog")
-                self.thread.daemon = True
-                self.thread.start()
-
-    def release(self, graph: Graph) -> None:
-        with self.lock:
-            self.holding.pop(graph, None)
-
-    def _watch(self) -> None:
-        while True:
-            time.sleep(0.25)  # the wall clock: this thread runs no node code
-            now = time.monotonic()
-            with self.lock:
-                for graph, held in list(self.holding.items()):
-                    actor, thread_id, since, warned = held
-                    if now - since < graph.stall_limit:
-                        continue
-                    if not warned:
-                        held[3] = True
-                        why = graph.stall_message(actor)
-                        graph.log_message(ERROR, actor.name, f"stopped: {why}.")
-                    held[2] = now  # raise again later if the code swallows it
-                    ctypes.pythonapi.PyThreadState_SetAsyncExc(
-                        ctypes.c_ulong(thread_id), ctypes.py_object(_Stalled)
-                    )
-
-
-_watchdog = _Watchdog()
-
-
-class _Event:
-    """Something scheduled to happen at a simulated time; cancel() makes it a no-op."""
-
-    __slots__ = ("action", "cancelled")
-
-    def __init__(self, action: Callable[[], None]) -> None:
-        self.action = action
-        self.cancelled = False
-
-    def cancel(self) -> None:
-        self.cancelled = True
-
-
-class _Signal:
-    """A one-shot wake-up between two threads: ``set`` lets one ``wait`` through, once.
-
-    Like a ``threading.Event`` that clears itself when a waiter gets through, built on a bare
-    lock, which hands the baton between threads about a third faster than an event.
-    """
-
-    __slots__ = ("_lock",)
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._lock.acquire()
-
-    def set(self) -> None:
-        """Let the next ``wait`` through (setting twice is the same as once)."""
-        if self._lock.locked():
-            self._lock.release()
-
-    def wait(self) -> None:
-        """Block until set, and take the signal."""
-        self._lock.acquire()
-
-    def clear(self) -> None:
-        """Take back a signal that no one waited for."""
-        self._lock.acquire(blocking=False)
-
-
-class _Actor:
-    """A node's main code, in a greenlet or a thread that runs only while it holds the baton."""
-
-    def __init__(
-        self,
-        graph: Graph,
-        target: Callable[..., Any],
-        args: tuple,
-        kwargs: dict,
-        launch: Dict[str, Any],
-        threads: bool,
-    ) -> None:
-        self.graph = graph
-        self.target = target
-        self.args = args
-        self.kwargs = kwargs
-        self.launch = launch
-        self.node: Optional[Node] = None
-        self.wake = _Signal()
-        self.finished = False
-        self.error: Optional[BaseException] = None
-        self.predicate: Optional[Callable[[], bool]] = None
-        self.polled = True
-        self.token = 0
-        self.resumes_after_shutdown = 0
-        #: A Ctrl-C that reached the node's code (greenlets run in the driving thread).
-        self.interrupt: Optional[KeyboardInterrupt] = None
-        self.stack: List[Node] = []  # the nodes whose callbacks run inside this node's code
-        self.label = str(launch.get("name") or getattr(target, "__name__", "node"))
-        #: Handles its code made before init_node, attached to its node then.
-        self.waiting_for_init: List[Callable[[Node], None]] = []
-        self.thread: Optional[threading.Thread] = None
-        self.greenlet: Any = None
-        self.home: Optional[int] = None  # the thread a greenlet runs in
-        if threads:
-            self.thread = threading.Thread(
-                target=self._main, name=f"node:{self.label}", daemon=True
-            )
-
-    @property
-    def name(self) -> str:
-        """The node's name, or the launch name before ``init_node``."""
-        return self.node.name if self.node is not None else self.label
-
-    def _main(self) -> None:
-        self.wake.wait()
-        context.enter_actor(self)
-        try:
-            self._run()
-        finally:
-            self.graph._driver_wake.set()
-
-    def _run(self) -> None:
-        try:
-            self.target(*self.args, **self.kwargs)
-            self._wait_for_threads()
-        except ROSInterruptException:
-            pass  # shutdown during a sleep ends a node normally
-        except KeyboardInterrupt as error:  # Ctrl-C while the node's code ran: the driver raises it
-            self.interrupt = error
-        except _Stalled:  # the watchdog logged why
-            self.error = _Stalled(self.graph.stall_message(self))
-        except BaseException as error:
-            self.error = error
-            self.graph.log_message(ERROR, self.name, format_error(error))
-        finally:
-            _watchdog.release(self.graph)
-            self.finished = True
-            _parked.discard(self.greenlet)
-            if self.node is not None and not self.node.is_shutdown:
-                reason = "the node's code raised an exception" if self.error else "node finished"
-                self.stack.append(self.node)
-                try:
-                    self.node.shutdown(reason)
-                finally:
-                    self.stack.pop()
-
-    def _wait_for_threads(self) -> None:
-        """Keep the node alive while threads its code started (not daemons) still run.
-
-        On a robot a node's process lives until its last non-daemon thread ends, even when its
-        main code has returned.
-        """
-        node = self.node
-        if node is not None and not node.is_shutdown:
-            graph = self.graph
-            graph.block(None, lambda: node.is_shutdown or not graph.threads_keeping(node))
-
-
-class _ThreadActor(_Actor):
-    """A thread that a node's code started: it runs, as the node, only with the baton.
-
-    Its node is the one whose code started it (or that node once its code calls
-    ``init_node``); it ends without shutting the node down. An exception it raises is logged
-    as the node's error, as rospy prints it, and the node goes on.
-    """
-
-    def __init__(
-        self,
-        graph: Graph,
-        thread: threading.Thread,
-        run: Callable[[], Any],
-        node: Optional[Node],
-        parent: Optional[_Actor],
-        keeps_node: bool,
-    ) -> None:
-        _Actor.__init__(self, graph, run, (), {}, {"name": thread.name}, threads=False)
-        self.thread = thread
-        self.parent = parent
-        self.keeps_node = keeps_node
-        self.node = node
-
-    @property
-    def node(self) -> Optional[Node]:
-        if self._node is None and self.parent is not None:
-            return self.parent.node
-        return self._node
-
-    @node.setter
-    def node(self, node: Optional[Node]) -> None:
-        self._node = node
-
-    def _run(self) -> None:
-        try:
-            self.target()
-        except ROSInterruptException:
-            pass
-        except KeyboardInterrupt as error:
-            self.interrupt = error
-        except _Stalled:
-            pass  # the watchdog logged why
-        except BaseException as error:
-            self.graph.log_message(
-                ERROR, self.name, f"thread {self.label} stopped:\n{format_error(error)}"
-            )
-        finally:
-            _watchdog.release(self.graph)
-            self.finished = True
 
 
 #: How many real seconds a node's code may run without calling rospy, unless a graph says.
@@ -342,17 +99,17 @@ class Graph(ParameterServer):
         self.threads = threads or _greenlet is None
         self.stall_limit = stall_limit
         self._now_ns = round(start_time * NS_PER_S)
-        self._events: List[Tuple[int, int, _Event]] = []
+        self._events: List[Tuple[int, int, Event]] = []
         self._sequence = itertools.count()
         self._clock_listeners: List[Callable[[int], None]] = []
         self._driver: Optional[int] = None
-        self._driver_wake = _Signal()
-        self._waiting: List[_Actor] = []
+        self._driver_wake = Signal()
+        self._waiting: List[Actor] = []
         # Waiting actors whose predicate must be checked after every event; the others
         # (sleeping, spinning) only when a node has shut down since the last check.
         self._polled = 0
         self._shutdowns = False
-        self._actors: List[_Actor] = []
+        self._actors: List[Actor] = []
         self._foreground: Dict[int, Node] = {}
         self._anonymous = itertools.count(1)
         self._crash: Optional[Tuple[str, BaseException]] = None
@@ -403,13 +160,13 @@ class Graph(ParameterServer):
             self._now_ns = t_ns
 
     # -- scheduling -------------------------------------------------------------------------
-    def schedule(self, t_ns: int, action: Callable[[], None]) -> _Event:
+    def schedule(self, t_ns: int, action: Callable[[], None]) -> Event:
         """Run ``action()`` when the clock reaches ``t_ns`` (now, if that is in the past)."""
-        event = _Event(action)
+        event = Event(action)
         heapq.heappush(self._events, (max(t_ns, self._now_ns), next(self._sequence), event))
         return event
 
-    def call_soon(self, action: Callable[[], None]) -> _Event:
+    def call_soon(self, action: Callable[[], None]) -> Event:
         """Run ``action()`` at the current simulated time, after what is already due now."""
         return self.schedule(self._now_ns, action)
 
@@ -482,7 +239,7 @@ class Graph(ParameterServer):
         if self._crash is not None:
             name, error = self._crash
             self._crash = None
-            if isinstance(error, _Stalled):
+            if isinstance(error, Stalled):
                 raise NodeCrashed(f"Node {name} stopped: {error}.", node=name)
             where = "in the log above" if self.echo_logs else "in graph.log"
             raise NodeCrashed(
@@ -528,7 +285,7 @@ class Graph(ParameterServer):
             "remap": dict(remap or {}),
             "params": dict(params or {}),
         }
-        actor = _Actor(self, target, args, kwargs, launch, self.threads)
+        actor = Actor(self, target, args, kwargs, launch, self.threads)
         self._actors.append(actor)
         if actor.thread is not None:
             actor.thread.start()
@@ -557,7 +314,7 @@ class Graph(ParameterServer):
         Returns:
             What the thread must run instead of ``run``.
         """
-        actor = _ThreadActor(self, thread, run, node, self.current_actor(), keeps_node)
+        actor = ThreadActor(self, thread, run, node, self.current_actor(), keeps_node)
         self._actors.append(actor)
         self.call_soon(lambda: self._resume(actor))
         return actor._main
@@ -568,20 +325,20 @@ class Graph(ParameterServer):
             actor.thread
             for actor in self._actors
             if actor.thread is not None
-            if isinstance(actor, _ThreadActor)
+            if isinstance(actor, ThreadActor)
             and actor.keeps_node
             and not actor.finished
             and actor.node is node
         ]
 
-    def thread_actor(self, thread: threading.Thread) -> Optional[_Actor]:
+    def thread_actor(self, thread: threading.Thread) -> Optional[Actor]:
         """The actor running ``thread``, if the graph adopted it."""
         for actor in self._actors:
-            if isinstance(actor, _ThreadActor) and actor.thread is thread:
+            if isinstance(actor, ThreadActor) and actor.thread is thread:
                 return actor
         return None
 
-    def _resume(self, actor: _Actor) -> None:
+    def _resume(self, actor: Actor) -> None:
         """Hand the baton to ``actor`` and wait until it blocks or finishes."""
         if actor.finished:
             return
@@ -590,10 +347,10 @@ class Graph(ParameterServer):
             if actor.resumes_after_shutdown > _SHUTDOWN_PATIENCE:
                 return
         if actor.thread is None:
-            _watchdog.hold(self, actor, threading.get_ident())
+            watchdog.hold(self, actor, threading.get_ident())
             self._switch_to(actor)
         else:
-            _watchdog.hold(self, actor, actor.thread.ident or 0)
+            watchdog.hold(self, actor, actor.thread.ident or 0)
             self._hand_over(actor)
         if actor.finished and actor.error is not None and self._crash is None:
             self._crash = (actor.name, actor.error)
@@ -601,12 +358,12 @@ class Graph(ParameterServer):
             interrupt, actor.interrupt = actor.interrupt, None
             raise interrupt
 
-    def _switch_to(self, actor: _Actor) -> None:
+    def _switch_to(self, actor: Actor) -> None:
         """Run ``actor``'s greenlet, as the current node, until it blocks or finishes."""
         if actor.greenlet is None:
             actor.greenlet = _greenlet.greenlet(actor._run)
             actor.home = threading.get_ident()
-            _parked.add(actor.greenlet)
+            parked.add(actor.greenlet)
         elif actor.home != threading.get_ident():
             raise ROSException(
                 f"Node {actor.name} runs in the thread that first drove this graph; drive the "
@@ -616,7 +373,7 @@ class Graph(ParameterServer):
             actor.greenlet.parent = _greenlet.getcurrent()  # where the node hands the baton back
             actor.greenlet.switch()
 
-    def _hand_over(self, actor: _Actor) -> None:
+    def _hand_over(self, actor: Actor) -> None:
         """Hand the baton to ``actor``'s thread and wait until it hands it back."""
         self._driver_wake.clear()
         actor.wake.set()
@@ -642,12 +399,12 @@ class Graph(ParameterServer):
                 self._stop_waiting(actor)
                 self._resume(actor)
 
-    def _stop_waiting(self, actor: _Actor) -> None:
+    def _stop_waiting(self, actor: Actor) -> None:
         self._waiting.remove(actor)
         if actor.polled:
             self._polled -= 1
 
-    def _wake(self, actor: _Actor, token: int) -> None:
+    def _wake(self, actor: Actor, token: int) -> None:
         if actor.token == token and actor in self._waiting:
             self._stop_waiting(actor)
             self._resume(actor)
@@ -697,7 +454,7 @@ class Graph(ParameterServer):
         if deadline_ns is not None:
             token = actor.token
             self.schedule(deadline_ns, lambda: self._wake(actor, token))
-        _watchdog.release(self)  # in the node's code, so a late stop still lands there
+        watchdog.release(self)  # in the node's code, so a late stop still lands there
         if actor.thread is None:
             actor.greenlet.parent.switch()
         else:
@@ -706,7 +463,7 @@ class Graph(ParameterServer):
         actor.predicate = None
         return predicate()
 
-    def stall_message(self, actor: _Actor) -> str:
+    def stall_message(self, actor: Actor) -> str:
         """Why the graph stopped ``actor``'s code: it ran too long without waiting."""
         return (
             f"its code ran for {self.stall_limit:g} s of real time without calling rospy, and "
@@ -720,7 +477,7 @@ class Graph(ParameterServer):
         return self._driver == threading.get_ident()
 
     # -- nodes ------------------------------------------------------------------------------
-    def current_actor(self) -> Optional[_Actor]:
+    def current_actor(self) -> Optional[Actor]:
         """The launched node whose code is calling, if any."""
         actor = context.calling_actor()
         return actor if actor is not None and actor.graph is self else None

@@ -92,11 +92,11 @@ def _library_modules() -> Dict[str, Any]:
     if "modules" not in _LIBRARIES:
         from importlib import metadata
 
-        found = metadata.entry_points()
+        found: Any = metadata.entry_points()
         if hasattr(found, "select"):  # Python 3.10 and later
             entries = found.select(group=LIBRARIES_GROUP)
         else:  # Python 3.8 and 3.9: a dict of groups
-            entries = found.get(LIBRARIES_GROUP, ())  # type: ignore[attr-defined]
+            entries = found.get(LIBRARIES_GROUP, ())
         _LIBRARIES["modules"] = {entry.name: entry for entry in entries}
     return _LIBRARIES["modules"]
 

@@ -766,7 +766,7 @@ def _run_catching(graph, failed):
 def test_a_graph_dropped_without_shutdown_leaves_its_nodes_parked():
     import gc
 
-    from duckielib.ros import graph as graph_module
+    from duckielib.ros import actors
 
     cleaned = []
 
@@ -780,8 +780,8 @@ def test_a_graph_dropped_without_shutdown_leaves_its_nodes_parked():
     graph = Graph(stdout=io.StringIO())
     graph.launch(tidy)
     graph.run(0.1)
-    parked = len(graph_module._parked)
+    parked = len(actors.parked)
     del graph
     gc.collect()
     assert cleaned == []
-    assert len(graph_module._parked) == parked
+    assert len(actors.parked) == parked
