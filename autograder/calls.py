@@ -25,6 +25,10 @@ the grader, the nodes in the sandbox, talking through topics and services only
 (:mod:`autograder.robots`).
 """
 
+# Over 600 lines: the kernel runs this file's source as one module that can import nothing of
+# the grader, so the value codec both sides share, the kernel's side and the grader's side of
+# the calls stay together, each in its own part of the file.
+
 from __future__ import annotations
 
 import base64
@@ -228,7 +232,9 @@ def answer(text: str) -> str:
 def serve(path: str) -> None:
     """Answer the grader's calls for one test, over the Unix socket ``path``, until it ends.
 
-    Each request and answer is a frame: an 8-byte big-endian length, then JSON text. The test's
+    Each request and answer is a frame of :mod:`autograder.sandbox.inside.wire` (an 8-byte
+    big-endian length, then JSON text), read here with a copy of the wire's few lines: this
+    file runs in the kernel, which imports nothing of the grader. The test's
     time limit interrupts the kernel (KeyboardInterrupt): the call then answers that the time
     ran out, and the serving ends. The variables of :data:`PASSED_ENVIRONMENT` the calls set
     are put back as they were when the test began.

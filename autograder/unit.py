@@ -10,7 +10,7 @@ with what that process wrote back, as plain data.
 Inside, nbgrader works as it does for a class, on a gradebook of this unit's own (a copy of the
 class's, which holds the hidden tests): the student's notebooks are repaired against the release
 (:mod:`autograder.tamper`), autograded with their cells run in the sandbox
-(:mod:`autograder.sandbox`, :mod:`autograder.execute`), and exported to drive the missions
+(:mod:`autograder.sandbox`), and exported to drive the missions
 (:mod:`autograder.driving`). The grader reads back only what it asked for: the executed notebook
 a sandboxed run prints (bounded), and the mission's files through :mod:`autograder.files`. The
 notebooks it exports are its own repaired copies, in a folder no sandbox sees.
@@ -18,7 +18,6 @@ notebooks it exports are its own repaired copies, in a folder no sandbox sees.
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import json
 import os
@@ -40,11 +39,6 @@ UNIT_MARGIN_S = 300
 #: written there), not hidden files, not Python modules (a ``numpy.py`` next to the notebook
 #: would stand in for numpy in the tests).
 SKIPPED = ("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
-
-_EXECUTE = Path(__file__).resolve().parent / "execute.py"
-#: Where the folder of files the grader's tests hand to the student's code appears (read-only)
-#: in the sandbox.
-SHARED_INSIDE = "/grader"
 
 
 def unit_seconds(task: Dict[str, Any]) -> float:
@@ -156,7 +150,7 @@ def _sandboxed_execute_class(unit: _Unit):
     import nbformat
     from nbgrader.preprocessors import Execute
 
-    from autograder.execute import METADATA_KEY, NOT_RUN, mark_not_run
+    from autograder.sandbox.inside.notebook import METADATA_KEY, NOT_RUN, mark_not_run
 
     class SandboxedExecute(Execute):
         def preprocess(self, nb, resources):
@@ -225,7 +219,7 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     """
     import copy
 
-    from autograder.execute import METADATA_KEY
+    from autograder.sandbox.inside.notebook import METADATA_KEY
 
     sent = copy.deepcopy(notebook)
     tests: Dict[int, str] = {}
@@ -268,6 +262,8 @@ class _TestsHere:
         def send(request: Dict[str, Any]) -> str:
             return ask(json.dumps(request), until, seconds)
 
+        from autograder.sandbox.server import SHARED_INSIDE
+
         paths = {str(self.unit.shared): SHARED_INSIDE} if self.unit.use_sandbox else {}
         link = Link(send, paths)
         saved = tempfile.tempdir
@@ -289,8 +285,9 @@ def raised_outside_tests(
     (:func:`autograder.tamper.repair`, then nbgrader's own restoring from the gradebook), so a
     student cannot turn a cell into a test or out of one. Only the error outputs are read from
     ``executed``, what came back from the run, and only as text. Cells that never ran because
-    the kernel died (the ``NotRun`` error of :func:`autograder.execute.mark_not_run`) are left
-    out: the kernel's death is a problem of its own.
+    the kernel died (the ``NotRun`` error of
+    :func:`autograder.sandbox.inside.notebook.mark_not_run`) are left out: the kernel's death is
+    a problem of its own.
 
     Args:
         assignment: the assignment's name, which starts the sentence.
@@ -298,7 +295,7 @@ def raised_outside_tests(
         executed: the same notebook as it came back, with its outputs.
         cell_seconds: the time limit of a cell, quoted for a cell that ran out of it.
     """
-    from autograder.execute import NOT_RUN
+    from autograder.sandbox.inside.notebook import NOT_RUN
     from duckielib.tools.handin import raised_cells
 
     raised = [
@@ -340,199 +337,6 @@ def _cells_that_stopped(name: str, sent: Any, executed: Any, cell_seconds: int) 
     return said
 
 
-class _Server:
-    """The sandbox that runs one student's notebooks, one after the other (``execute.py --serve``).
-
-    One sandbox and one pre-warmed kernel launcher serve all of the student's notebooks, each
-    in a new kernel, so the libraries are imported once per student rather than once per
-    notebook. A notebook that runs out of time, or a sandbox that dies, costs that notebook
-    only: the sandbox is killed and a new one serves the next notebook.
-    """
-
-    def __init__(self, folder: Path, limits: Any, use_sandbox: bool, shared: Path) -> None:
-        self.folder = folder
-        self.shared = shared
-        self.limits = limits
-        self.use_sandbox = use_sandbox
-        self.process: Optional[subprocess.Popen] = None
-        self.errors: Any = None
-
-    def _start(self) -> subprocess.Popen:
-        from autograder.sandbox import sandboxed_command
-
-        command = [sys.executable, str(_EXECUTE), "--serve", str(self.limits.cell_seconds)]
-        if self.use_sandbox:
-            command = sandboxed_command(
-                [*command, "--sandboxed"],
-                self.folder,
-                self.limits,
-                course=self.folder,
-                shared=(self.shared, SHARED_INSIDE),
-            )
-        from autograder.sandbox import joined, student_groups
-
-        self.errors = tempfile.TemporaryFile()  # noqa: SIM115 - open for the sandbox's life
-        if self.use_sandbox:
-            command = joined(student_groups(self.limits), command)
-        return subprocess.Popen(
-            command,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            stderr=self.errors,
-            cwd=self.folder,
-            start_new_session=True,
-        )
-
-    def run(self, name: str, text: str, tests: Any = None) -> Tuple[Optional[str], str]:
-        """Run notebook ``name`` (its folder's name); its executed text, or None and why.
-
-        Args:
-            name: the notebook's folder.
-            text: the notebook to run.
-            tests: called as ``tests(grade_id, ask)`` when the run reaches a test the grader
-                runs on its side; ``ask(request, until, seconds)`` sends a call to the kernel
-                and returns its answer (a text).
-        """
-        from autograder.calls import Abandon, CallsBroken
-        from autograder.execute import frame
-
-        seconds = self.limits.submission_seconds
-        deadline = time.monotonic() + seconds
-        if self.process is None:
-            self.process = self._start()
-        request = frame(json.dumps({"folder": name, "notebook": text}).encode("utf-8"))
-        final: List[Dict[str, Any]] = []
-        process = self.process
-
-        def ask(call: str, until: float, cell_seconds: int) -> str:
-            if final:
-                raise CallsBroken("the notebook's kernel had stopped")
-            try:
-                _write_all(process.stdin, frame(json.dumps({"call": call}).encode()), deadline)
-                while True:
-                    got = self._reply(min(until, deadline))
-                    if "answer" in got:
-                        return str(got["answer"])
-                    if "notebook" in got or "problem" in got:
-                        final.append(got)
-                        raise CallsBroken("the notebook's kernel stopped during the test")
-            except TimeoutError as error:
-                if time.monotonic() < deadline:
-                    raise CallsBroken(
-                        f"the test ran out of the {cell_seconds} s a cell may take"
-                    ) from None
-                raise Abandon from error
-            except (OSError, EOFError, ValueError, _TooMuch) as error:
-                raise Abandon from error
-
-        try:
-            _write_all(self.process.stdin, request, deadline)
-            while True:
-                reply = self._reply(deadline)
-                if "test" in reply and tests is not None:
-                    tests(str(reply["test"]), ask)
-                    if final:
-                        reply = final[0]
-                        break
-                    _write_all(self.process.stdin, frame(b'{"end": true}'), deadline)
-                elif "answer" not in reply and "test" not in reply:
-                    break
-        except (TimeoutError, OSError, EOFError, ValueError, _TooMuch, Abandon) as error:
-            # A test's call that could not go on ended the run the same ways.
-            cause = error.__cause__ if isinstance(error, Abandon) else error
-            return None, self._ended(cause, seconds)
-        if "notebook" not in reply:
-            return None, str(reply.get("problem", "gave no notebook"))[:500]
-        return str(reply["notebook"]), ""
-
-    def _ended(self, error: Optional[BaseException], seconds: float) -> str:
-        """End the sandbox after its run stopped with ``error``; why, in a sentence."""
-        if isinstance(error, _TooMuch):
-            why = f"answered with {error} bytes, more than the grader reads"
-        elif isinstance(error, TimeoutError):
-            why = (
-                f"ran out of its {seconds} s (all cells and the kernel's start); the cells "
-                "after that never ran"
-            )
-        else:
-            why = self._last_words() or "stopped with no output"
-        self.stop()
-        return why
-
-    def _reply(self, deadline: float) -> Dict[str, Any]:
-        """The sandbox's next message; TimeoutError, EOFError, ValueError or _TooMuch."""
-        assert self.process is not None
-        assert self.process.stdout is not None
-        size = int.from_bytes(_read_exact(self.process.stdout, 8, deadline), "big")
-        if size > self.limits.output_bytes:
-            raise _TooMuch(size)
-        reply = json.loads(_read_exact(self.process.stdout, size, deadline))
-        if not isinstance(reply, dict):
-            raise ValueError("not a message")
-        return reply
-
-    def _last_words(self) -> str:
-        if self.errors is None:
-            return ""
-        self.errors.seek(0)
-        return self.errors.read(1_000_000).decode("utf-8", errors="replace").strip()[-500:]
-
-    def stop(self) -> None:
-        """End the sandbox and everything in it."""
-        if self.process is None:
-            return
-        # _start always opens both pipes; Popen only types them as optional.
-        if self.process.stdin is not None:
-            with contextlib.suppress(OSError):
-                self.process.stdin.close()
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(self.process.pid, signal.SIGKILL)
-        self.process.wait()
-        if self.process.stdout is not None:
-            self.process.stdout.close()
-        self.errors.close()
-        self.process = self.errors = None
-
-
-class _TooMuch(Exception):
-    """The sandbox sent a message larger than the grader reads."""
-
-
-def _write_all(stream: Any, data: bytes, deadline: float) -> None:
-    """Write ``data`` to a pipe before ``deadline`` (monotonic), or raise TimeoutError."""
-    import select
-
-    fd = stream.fileno()
-    os.set_blocking(fd, False)
-    view = memoryview(data)
-    while view:
-        left = deadline - time.monotonic()
-        if left <= 0 or not select.select([], [fd], [], left)[1]:
-            raise TimeoutError
-        try:
-            view = view[os.write(fd, view) :]
-        except BlockingIOError:
-            continue
-
-
-def _read_exact(stream: Any, size: int, deadline: float) -> bytes:
-    """Read ``size`` bytes from a pipe before ``deadline``; EOFError if it closes first."""
-    import select
-
-    fd = stream.fileno()
-    chunks, got = [], 0
-    while got < size:
-        left = deadline - time.monotonic()
-        if left <= 0 or not select.select([fd], [], [], left)[0]:
-            raise TimeoutError
-        chunk = os.read(fd, min(size - got, 1 << 20))
-        if not chunk:
-            raise EOFError
-        chunks.append(chunk)
-        got += len(chunk)
-    return b"".join(chunks)
-
-
 @dataclasses.dataclass
 class _Unit:
     """One student's grading, inside the unit's process."""
@@ -561,7 +365,9 @@ class _Unit:
         self.sandboxes = self.folder / "sandboxes"
         self.export = self.folder / "export"
         self.shared = self.folder / "shared"
-        self.server = _Server(self.sandboxes, self.limits, self.use_sandbox, self.shared)
+        from autograder.sandbox.server import NotebookServer
+
+        self.server = NotebookServer(self.sandboxes, self.limits, self.use_sandbox, self.shared)
 
     def hand_in(self, name: str, aside: List[str]) -> bool:
         """Repair one notebook and lay it out for nbgrader, the sandbox and the export."""

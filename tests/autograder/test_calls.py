@@ -215,6 +215,8 @@ def test_the_kernel_serves_a_test_over_its_socket_and_keeps_its_own_robot_name(
 
     import IPython
 
+    from autograder.sandbox.inside import wire
+
     space = {"robot_topic": lambda name: f"/{os.environ['VEHICLE_NAME']}/{name}"}
     monkeypatch.setattr(IPython, "get_ipython", lambda: types.SimpleNamespace(user_ns=space))
     monkeypatch.setenv("VEHICLE_NAME", "kernels_own")
@@ -227,16 +229,16 @@ def test_the_kernel_serves_a_test_over_its_socket_and_keeps_its_own_robot_name(
     connection, _ = listener.accept()
     stream = connection.makefile("rb")
 
+    # The relay's frames (the wire's), which the kernel's side reads with a copy of its own.
     def ask(request):
-        data = json.dumps(request).encode()
-        connection.sendall(len(data).to_bytes(8, "big") + data)
-        return json.loads(stream.read(int.from_bytes(stream.read(8), "big")))
+        connection.sendall(wire.frame(json.dumps(request).encode()))
+        return json.loads(wire.read_frame(stream))
 
     handle = ask({"op": "get", "name": "robot_topic"})["value"]
     got = ask({"op": "call", "target": handle[1], "args": ["l", [["s", "chatter"]]],
                "kwargs": ["d", []], "environment": {"VEHICLE_NAME": "db21"}})  # fmt: skip
     assert got == {"value": ["s", "/db21/chatter"]}
-    connection.sendall((3).to_bytes(8, "big") + b"end")
+    connection.sendall(wire.frame(b"end"))
     serving.join(timeout=10)
     assert not serving.is_alive()
     assert os.environ["VEHICLE_NAME"] == "kernels_own"

@@ -1,7 +1,7 @@
-"""Tests of autograder.execute: a notebook run as the sandbox runs it, with a forked kernel.
+"""Tests of the sandbox's server: a notebook run as the sandbox runs it, with a forked kernel.
 
-``execute.py`` runs here outside the sandbox, with the sandbox's thread settings. Each case
-runs with the kernel forked from the zygote and, where the two must agree, also launched the
+The server (``autograder/sandbox/inside``) runs here outside the sandbox, with the sandbox's
+thread settings. Each case runs with the kernel forked from the zygote and, where the two must agree, also launched the
 usual way (``DUCKIE_KERNEL_ZYGOTE=0``), and compares what the notebook shows.
 """
 
@@ -19,11 +19,12 @@ import nbformat
 import pytest
 from pace import seconds as paced
 
-from autograder.execute import METADATA_KEY, NOT_RUN, ZYGOTE_VARIABLE
+from autograder.sandbox.inside.notebook import METADATA_KEY, NOT_RUN
+from autograder.sandbox.inside.zygote import ZYGOTE_VARIABLE
+from autograder.sandbox.server import RUNNER
 
 pytestmark = pytest.mark.notebook
 
-EXECUTE = Path(__file__).resolve().parents[2] / "autograder" / "execute.py"
 #: Printed by a first cell: whether the kernel was forked (the zygote imported duckielib.plots).
 FORKED = "import sys\nprint('duckielib.plots' in sys.modules)"
 DIED = "the kernel died"
@@ -55,14 +56,14 @@ def _run(
     tests: Sequence[int] = (),
     backend: Optional[str] = "Agg",
 ) -> nbformat.NotebookNode:
-    """Run ``execute.py`` on the notebook of ``cells`` in ``folder``; the executed notebook."""
+    """Run the server on the notebook of ``cells`` in ``folder``; the executed notebook."""
     env = {key: value for key, value in os.environ.items() if key != "MPLBACKEND"}
     env.update(OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
     env[ZYGOTE_VARIABLE] = "1" if forked else "0"
     if backend is not None:
         env["MPLBACKEND"] = backend
     result = subprocess.run(
-        [sys.executable, str(EXECUTE), str(seconds)],
+        [sys.executable, str(RUNNER), str(seconds)],
         input=_notebook(cells, tests),
         capture_output=True,
         text=True,
@@ -122,7 +123,8 @@ def test_a_forked_kernel_starts_as_a_new_one(tmp_path: Path) -> None:
     assert usual[0] == "False\n"
     assert forked[1] == f"__main__\n{tmp_path}\n"
     assert forked[2].startswith("[")
-    assert str(EXECUTE.parent) not in forked[2]
+    assert str(RUNNER) not in forked[2]
+    assert str(RUNNER.parent) not in forked[2]
     assert forked[4] == "True True\n"
     assert forked[1:] == usual[1:]
 
@@ -223,7 +225,7 @@ def test_figures_show_as_with_the_usual_launch(tmp_path: Path, backend: Optional
 
 def test_the_zygote_refuses_a_kernel_of_another_environment() -> None:
     script = (
-        "from autograder.execute import Zygote\n"
+        "from autograder.sandbox.inside.zygote import Zygote\n"
         "zygote = Zygote.start()\n"
         "print(zygote.launch(['python'], None, {'ONLY': 'this'}))\n"
         "zygote.close()\n"
@@ -236,18 +238,18 @@ def test_the_zygote_refuses_a_kernel_of_another_environment() -> None:
         capture_output=True,
         text=True,
         env=env,
-        cwd=EXECUTE.parents[1],
+        cwd=RUNNER.parents[2],
         timeout=120,
     )
     assert result.stdout.split() == ["None", "None"], result.stderr
 
 
 def _serve(tmp_path: Path, notebooks: Sequence[Tuple[str, str]], sandboxed: bool) -> List[dict]:
-    """Run ``(folder, notebook text)`` pairs through one ``execute.py --serve``; its replies."""
-    from autograder.execute import frame, read_frame
+    """Run ``(folder, notebook text)`` pairs through one server (``--serve``); its replies."""
     from autograder.sandbox import NOBODY, Limits, sandboxed_command
+    from autograder.sandbox.inside.wire import frame, read_frame
 
-    command = [sys.executable, str(EXECUTE), "--serve", "20"]
+    command = [sys.executable, str(RUNNER), "--serve", "20"]
     for folder, _ in notebooks:
         (tmp_path / folder).mkdir(exist_ok=True)
     if sandboxed:

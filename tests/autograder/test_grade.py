@@ -20,9 +20,9 @@ from pace import seconds
 
 from autograder.course import ROOT
 from autograder.driving import MISSIONS
-from autograder.execute import NOT_RUN
 from autograder.grade import grade_class, raised_outside_tests
 from autograder.sandbox import NOBODY, Limits, sandboxed_command
+from autograder.sandbox.inside.notebook import NOT_RUN
 from duckielib.tools import deploy as robot_project
 
 pytestmark = pytest.mark.slow
@@ -65,10 +65,17 @@ def test_the_sandbox_hides_the_course_and_the_grader(sandbox, tmp_path):
         "except OSError:\n"
         "    print('read-only')\n"
     )
+    # Of the grader, only what runs inside: the server's package and the calls' kernel side.
+    grader = ROOT / "autograder"
+    seen = [grader / "sandbox" / "inside" / "serve.py", grader / "calls.py"]
+    hidden = [grader / "grade.py", grader / "sandbox" / "server.py", grader / "unit.py"]
+    paths = [str(path) for path in seen + hidden]
+    code += f"print(*[pathlib.Path(path).exists() for path in {paths!r}])\n"
     result = run_inside(tmp_path, code)
-    assert result.stdout.split() == [str(NOBODY), "False", "False", "False", "read-only"], (
-        result.stderr
-    )
+    assert result.stdout.split() == [
+        str(NOBODY), "False", "False", "False", "read-only", "True", "True", "False", "False",
+        "False",
+    ], result.stderr  # fmt: skip
     assert (tmp_path / "box" / "mine.txt").read_text() == "ok"
 
 

@@ -252,10 +252,10 @@ def _readonly_paths() -> List[str]:
 
     paths = ["/usr", "/etc", sys.prefix, sys.base_prefix]
     library = Path(duckielib.__file__).resolve().parent
-    # Of the grader, only what runs in the sandbox: the notebooks' runner and the calls' kernel
+    # Of the grader, only what runs in the sandbox: its server (`inside/`) and the calls' kernel
     # side (not the scoring code, the tests' data or the gradebook's handling).
-    grader = Path(__file__).resolve().parent
-    paths += [str(library), str(grader / "execute.py"), str(grader / "calls.py"), str(PROJECT)]
+    wing = Path(__file__).resolve().parent
+    paths += [str(library), str(wing / "inside"), str(wing.parent / "calls.py"), str(PROJECT)]
     real_python = Path(sys.executable).resolve().parent.parent
     paths.append(str(real_python))
     unique: List[str] = []
@@ -308,8 +308,24 @@ def sandboxed_command(
             "apt-get install bubblewrap), or grade without a sandbox with --no-sandbox "
             "(student code then runs with your rights)."
         )
+    args = [bwrap, *_system_view()]
+    if course is None:
+        inside = INSIDE
+    elif Path(course) == Path(folder):  # all the student's folders, writable
+        inside, course = COURSE, None
+    else:
+        inside = f"{COURSE}/{Path(folder).name}"
+    if course is not None:
+        args += ["--ro-bind", str(course), COURSE]
+    if shared is not None:
+        args += ["--ro-bind", str(shared[0]), shared[1]]
+    args += ["--bind", str(folder), inside, "--chdir", inside, *_as_student(limits)]
+    return args + _environment(env) + list(command)
+
+
+def _system_view() -> List[str]:
+    """Bubblewrap's options for what the sandbox sees of the system: read-only, its own /tmp."""
     args = [
-        bwrap,
         "--unshare-net",
         "--unshare-pid",
         "--unshare-ipc",
@@ -340,19 +356,12 @@ def sandboxed_command(
         "--dev", "/dev",
         "--proc", "/proc",
     ]  # fmt: skip
-    if course is None:
-        inside = INSIDE
-    elif Path(course) == Path(folder):  # all the student's folders, writable
-        inside, course = COURSE, None
-    else:
-        inside = f"{COURSE}/{Path(folder).name}"
-    if course is not None:
-        args += ["--ro-bind", str(course), COURSE]
-    if shared is not None:
-        args += ["--ro-bind", str(shared[0]), shared[1]]
-    args += [
-        "--bind", str(folder), inside,
-        "--chdir", inside,
+    return args
+
+
+def _as_student(limits: Limits) -> List[str]:
+    """The command line's middle: become the unprivileged user, with ``limits``, no environment."""
+    return [
         # Only to become nobody just below; setpriv then drops every capability.
         "--cap-add", "CAP_SETUID",
         "--cap-add", "CAP_SETGID",
@@ -373,6 +382,10 @@ def sandboxed_command(
         "env",
         "-i",
     ]  # fmt: skip
+
+
+def _environment(env: Optional[Dict[str, str]]) -> List[str]:
+    """The sandbox's environment variables, as ``env -i`` takes them: its own, then ``env``."""
     base = {
         "HOME": "/tmp",
         "USER": "student",  # the user may have no name on this machine
@@ -390,8 +403,7 @@ def sandboxed_command(
         "MKL_NUM_THREADS": "1",
     }
     base.update(env or {})
-    args += [f"{key}={value}" for key, value in base.items()]
-    return args + list(command)
+    return [f"{key}={value}" for key, value in base.items()]
 
 
 class Started:
