@@ -1,8 +1,9 @@
 """Tests of the sandbox's server: a notebook run as the sandbox runs it, with a forked kernel.
 
 The server (``autograder/sandbox/inside``) runs here outside the sandbox, with the sandbox's
-thread settings. Each case runs with the kernel forked from the zygote and, where the two must agree, also launched the
-usual way (``DUCKIE_KERNEL_ZYGOTE=0``), and compares what the notebook shows.
+thread settings. Each case runs with the kernel forked from the zygote and, where the two must
+agree, also launched the usual way (``DUCKIE_KERNEL_ZYGOTE=0``), and compares what the notebook
+shows.
 """
 
 from __future__ import annotations
