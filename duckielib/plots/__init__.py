@@ -10,6 +10,8 @@ outside it draws, and the modules it draws (the simulator, the bags) never impor
   with play, pause and a time slider in a notebook, or as a GIF or MP4;
 - :mod:`~duckielib.plots.camera`: an image topic on screen, live or from a bag;
 - :mod:`~duckielib.plots.diagrams`: the notebooks' diagrams of missions;
+- :mod:`~duckielib.plots.driving`: the driving experiments' figures (speed sweeps, the last
+  ticks of a stop, silent encoders, the odometry's gap over a run);
 - :mod:`~duckielib.plots.rosgraph`: the ROS graph drawn from the graph itself (``rqt_graph``);
 - :mod:`~duckielib.plots.files`: every figure and animation written to a file, whole or not
   at all;
@@ -23,6 +25,12 @@ is all a notebook or a command needs; other names are the package's own.
 from duckielib.plots.camera import ImageView
 from duckielib.plots.canvas import draw_tile_grid
 from duckielib.plots.diagrams import plot_mission_states
+from duckielib.plots.driving import (
+    plot_encoder_silence,
+    plot_gap_over_time,
+    plot_speed_sweep,
+    plot_ticks_around_stop,
+)
 from duckielib.plots.files import save_animation, save_figure, save_gif_frames
 from duckielib.plots.paths import animate_path, plot_path, plot_pose_over_time, pose_figure
 from duckielib.plots.player import Recording, RunPlayer
@@ -40,11 +48,15 @@ __all__ = [
     "draw_mat",
     "draw_robot",
     "draw_tile_grid",
+    "plot_encoder_silence",
+    "plot_gap_over_time",
     "plot_mission_states",
     "plot_path",
     "plot_pose_over_time",
     "plot_ros_graph",
     "plot_run",
+    "plot_speed_sweep",
+    "plot_ticks_around_stop",
     "pose_figure",
     "replay_figure",
     "save_animation",

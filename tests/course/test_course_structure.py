@@ -278,3 +278,15 @@ def test_every_question_has_an_answer_cell_or_says_it_is_for_thinking_only(name)
             f"{name}, cell {index + 1}: a prompt to think about starts: {THINK}"
         )
         assert "in a markdown cell below" not in text, f"{name}, cell {index + 1}: which cell?"
+
+
+@pytest.mark.parametrize("folder", [SOLUTIONS, COURSE], ids=["solutions", "course"])
+def test_no_given_code_cell_is_longer_than_the_limit(folder):
+    # Given code shows the experiment; its plumbing belongs in the library, behind a name.
+    from notebook_sizes import CELL_LINES, sizes
+
+    found = sizes(folder)
+    assert [size.name for size in found] == NAMES
+    over = [f"{size.name}, cell {number}: {count} lines" for size in found
+            for number, count in size.over()]  # fmt: skip
+    assert over == [], f"given code cells over {CELL_LINES} lines:\n" + "\n".join(over)
