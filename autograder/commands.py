@@ -287,7 +287,16 @@ def _hub(args: argparse.Namespace) -> int:
 
 
 def add_commands(commands: argparse._SubParsersAction) -> None:
-    """Add the instructors' commands: release, grade, formgrade, feedback, student-edition."""
+    """Add the instructors' commands: release, grade, formgrade, feedback, hub, student-edition."""
+    _add_release(commands)
+    _add_grade(commands)
+    _add_formgrade(commands)
+    _add_feedback(commands)
+    _add_hub(commands)
+    _add_student_edition(commands)
+
+
+def _add_release(commands: argparse._SubParsersAction) -> None:
     release = commands.add_parser(
         "release", help="regenerate course/ from solutions/ with nbgrader (instructors)"
     )
@@ -296,6 +305,8 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
     )
     release.set_defaults(handler=_release)
 
+
+def _add_grade(commands: argparse._SubParsersAction) -> None:
     grade = commands.add_parser(
         "grade", help="autograde a class: nbgrader, a sandbox per submission, in parallel"
     )
@@ -326,6 +337,9 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
         help="run student code without bubblewrap (only where it cannot be installed)",
     )
     grade.set_defaults(handler=_grade)
+
+
+def _add_formgrade(commands: argparse._SubParsersAction) -> None:
     formgrade = commands.add_parser(
         "formgrade",
         help="grade the answers in words of a graded class in nbgrader's Formgrader (JupyterLab)",
@@ -335,6 +349,9 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
         "lab_args", nargs="*", help="more JupyterLab options, after -- (-- --port=8890)"
     )
     formgrade.set_defaults(handler=_formgrade)
+
+
+def _add_feedback(commands: argparse._SubParsersAction) -> None:
     feedback = commands.add_parser(
         "feedback",
         help="write grades.csv and the feedback pages again, with the grades and comments "
@@ -354,6 +371,10 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
         "its gradebook export; for Moodle, its participants list)",
     )
     feedback.set_defaults(handler=_feedback)
+
+
+def _add_hub(commands: argparse._SubParsersAction) -> None:
+    """``duckie hub`` and its commands: users, start, release, collect, return, image."""
     hub = commands.add_parser(
         "hub",
         help="a class hub on this machine: JupyterHub with nbgrader's exchange (as root)",
@@ -420,6 +441,9 @@ def add_commands(commands: argparse._SubParsersAction) -> None:
         "or OAuth authenticator)",
     )
     hub.set_defaults(handler=_hub)
+
+
+def _add_student_edition(commands: argparse._SubParsersAction) -> None:
     edition = commands.add_parser(
         "student-edition",
         help="write what students receive (course/, the library, robot_nodes/; nothing of "

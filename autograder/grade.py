@@ -20,6 +20,10 @@ Input: a folder with one folder (or ``.zip``) per student, holding their assignm
 (a copy of ``course/``), or nbgrader's own ``submitted/STUDENT/ASSIGNMENT`` layout.
 """
 
+# Over 600 lines: grading a class is one pipeline with one writer of its results (reading the
+# submissions, fingerprints that skip unchanged students, the Dask tasks and `_Writer`), whose steps
+# share the out folder's layout; `_Writer` is the seam should it grow.
+
 from __future__ import annotations
 
 import csv
@@ -676,6 +680,24 @@ def grade_class(
         "driving": driving,
     }
     started = time.monotonic()
+    pending = _to_grade(students, out, setup, writer, options)
+    writer.read_people_grades(list(writer.results.values()))  # given since the last run
+    writer.write_csv()
+    if pending:
+        _run(pending, setup, writer, jobs, scheduler, progress, started, len(students))
+    return [writer.results[name] for name in sorted(writer.results)]
+
+
+def _to_grade(
+    students: Dict[str, Path], out: Path, setup: _Course, writer: _Writer, options: Dict[str, Any]
+) -> List[Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]]:
+    """Read each student's submission; what is left to grade, by student.
+
+    A student whose files, course and options are those of a finished earlier run into
+    ``out`` keeps that run's result (into ``writer``); the others are kept in ``out/work``
+    and come back as ``(student, options, files, key, what was left out)``.
+    """
+    course, names = options["course"], options["names"]
     pending: List[Tuple[str, Dict[str, Any], Dict[str, bytes], str, List[str]]] = []
     for folder_name in sorted(students):
         student = student_id(folder_name)
@@ -694,13 +716,9 @@ def grade_class(
             writer.results[student] = kept
             continue
         said = _left_out(collected.left_out, names)
-        _keep_submitted(work, student, collected.files, names)
+        _keep_submitted(out / "work", student, collected.files, names)
         pending.append((student, {**options, "student": student}, collected.files, key, said))
-    writer.read_people_grades(list(writer.results.values()))  # given since the last run
-    writer.write_csv()
-    if pending:
-        _run(pending, setup, writer, jobs, scheduler, progress, started, len(students))
-    return [writer.results[name] for name in sorted(writer.results)]
+    return pending
 
 
 def write_grades(out: Path, source: Path = ROOT / "solutions") -> List[StudentResult]:

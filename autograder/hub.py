@@ -29,6 +29,10 @@ home is 0700, the exchange's inbound folder lets a student write but not list, a
 released under a name only the student's own submission secret gives.
 """
 
+# Over 600 lines: one class hub from accounts to returned feedback, whose steps share the hub
+# folder's layout and configuration templates; the Kubernetes image (`write_image` and its
+# templates, about 120 lines) could stand on its own.
+
 from __future__ import annotations
 
 import json

@@ -38,6 +38,7 @@ from duckielib.missions import (
     Pose,
     ReturnToStart,
     Rotate,
+    State,
     Straight,
     describe_move,
 )
@@ -464,47 +465,67 @@ def _state_motions(
             continue
         first = max(0, int(np.searchsorted(truth.t, t0 + run.start, side="right")) - 1)
         last = max(first + 1, int(np.searchsorted(truth.t, t0 + run.end, side="right")))
-        t, x, y = truth.t[first:last], truth.x[first:last], truth.y[first:last]
-        theta = theta_all[first:last]
-        lengths = travelled[first:last] - travelled[first]
-        turns = np.concatenate(([0.0], np.cumsum(_wrapped(np.diff(theta)))))
-        spans = _match_moves(state.moves, _run_bounds(x, y, theta, t), lengths, turns)
-        expected: Pose = (float(x[0]), float(y[0]), float(theta[0]))
-        driven_before = float(travelled[first])
-        gated: List[MoveCheck] = []
-        for move, name, (a, b) in zip(state.moves, names, spans):
-            expected = _follow(move, expected, mission.start)
-            checks = _check_move(
-                move,
-                name,
-                state.name,
-                (float(x[a]), float(y[a]), float(theta[a])),
-                (float(x[b]), float(y[b]), float(theta[b])),
-                float(lengths[b] - lengths[a]),
-                float(turns[b] - turns[a]),
-                expected,
-            )
-            if isinstance(move, ReturnToStart) and driven_before < planned_before / 2:
-                # Already at the start because nothing before drove: the way back is not seen.
-                for check in checks:
-                    check.passed, check.reason = False, None
-                gated += checks
-            motion.checks += checks
-        if gated:
-            motion.problems.append(
-                f"In state {state.name}, the robot had driven only {driven_before:.2f} m since "
-                f"the mission began (the mission drives {planned_before:.2f} m before it), so "
-                "there was nothing to come back from."
-            )
-        failed = [check.reason for check in motion.checks if check.reason is not None]
-        still = lengths[-1] <= 2 * STILL_TOLERANCE_M and float(
-            np.sum(np.abs(np.diff(turns)))
-        ) <= math.radians(5)
-        if failed and still:
-            moves = ", ".join(describe_move(move) for move in state.moves)
-            failed = [f"In state {state.name}, the robot did not move; its moves are: {moves}."]
-        motion.problems += [reason for reason in failed if reason is not None]
+        driven = (truth, theta_all, travelled)
+        _check_driven(motion, state, names, mission.start, driven, first, last, planned_before)
     return motions
+
+
+def _check_driven(
+    motion: StateMotion,
+    state: State,
+    names: List[str],
+    start: Pose,
+    driven: Tuple[PoseTrack, np.ndarray, np.ndarray],
+    first: int,
+    last: int,
+    planned_before: float,
+) -> None:
+    """Check each move of ``state`` (into ``motion``) on the truth track, ``first`` to ``last``.
+
+    ``driven`` is the whole truth track, its headings as floats (rad) and the metres travelled
+    since its start; ``planned_before``, the metres the perfect robot drives before the state.
+    """
+    truth, theta_all, travelled = driven
+    t, x, y = truth.t[first:last], truth.x[first:last], truth.y[first:last]
+    theta = theta_all[first:last]
+    lengths = travelled[first:last] - travelled[first]
+    turns = np.concatenate(([0.0], np.cumsum(_wrapped(np.diff(theta)))))
+    spans = _match_moves(state.moves, _run_bounds(x, y, theta, t), lengths, turns)
+    expected: Pose = (float(x[0]), float(y[0]), float(theta[0]))
+    driven_before = float(travelled[first])
+    gated: List[MoveCheck] = []
+    for move, name, (a, b) in zip(state.moves, names, spans):
+        expected = _follow(move, expected, start)
+        checks = _check_move(
+            move,
+            name,
+            state.name,
+            (float(x[a]), float(y[a]), float(theta[a])),
+            (float(x[b]), float(y[b]), float(theta[b])),
+            float(lengths[b] - lengths[a]),
+            float(turns[b] - turns[a]),
+            expected,
+        )
+        if isinstance(move, ReturnToStart) and driven_before < planned_before / 2:
+            # Already at the start because nothing before drove: the way back is not seen.
+            for check in checks:
+                check.passed, check.reason = False, None
+            gated += checks
+        motion.checks += checks
+    if gated:
+        motion.problems.append(
+            f"In state {state.name}, the robot had driven only {driven_before:.2f} m since "
+            f"the mission began (the mission drives {planned_before:.2f} m before it), so "
+            "there was nothing to come back from."
+        )
+    failed = [check.reason for check in motion.checks if check.reason is not None]
+    still = lengths[-1] <= 2 * STILL_TOLERANCE_M and float(
+        np.sum(np.abs(np.diff(turns)))
+    ) <= math.radians(5)
+    if failed and still:
+        moves = ", ".join(describe_move(move) for move in state.moves)
+        failed = [f"In state {state.name}, the robot did not move; its moves are: {moves}."]
+    motion.problems += [reason for reason in failed if reason is not None]
 
 
 def state_motions(

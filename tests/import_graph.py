@@ -10,7 +10,28 @@ function (a lazy import) is listed apart, since it only holds when that function
 module named in a string for ``importlib.import_module`` or ``__import__``. A circle is a set
 of modules that reach each other through top-level arrows. The tests (``tests/test_purity.py``)
 use :func:`graph` to keep the arrows the way they should point. The report also names the
-modules and functions over the house's limits (:data:`MODULE_LINES`, :data:`FUNCTION_LINES`).
+modules and functions over the house's limits (:data:`MODULE_LINES`, :data:`FUNCTION_LINES`),
+and apart those that do not say why they are so long.
+
+A module or function over its limit says why at its top, in one comment: ``# Over 600
+lines:`` (``# Over 80 lines:`` for a function) and the reason, a sentence that ends with a
+full stop and may go on over the comment lines below. It stands where only comments can:
+
+- a module's, between its docstring and its first statement (usually the ``__future__``
+  import)::
+
+      # Over 600 lines: one state machine, whose states read best side by side.
+
+      from __future__ import annotations
+
+- a function's or method's, first in its body, after its docstring::
+
+      def replay(bag):
+          (the docstring)
+          # Over 80 lines: the message path is one loop, for speed.
+          ...
+
+Anything else is no reason (:func:`reason`).
 """
 
 from __future__ import annotations
@@ -20,7 +41,7 @@ import sys
 from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict, List, Set
+from typing import Dict, List, Set, Tuple
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("duckielib", "autograder")
@@ -41,6 +62,8 @@ class Graph:
     named: Dict[str, Set[str]] = field(default_factory=lambda: defaultdict(set))
     #: ``module:Class.function`` -> its lines.
     functions: Dict[str, int] = field(default_factory=dict)
+    #: A module's or ``module:Class.function``'s reason for its length, where it gives one.
+    reasons: Dict[str, str] = field(default_factory=dict)
 
     def circles(self, every: bool = False) -> List[List[str]]:
         """The sets of modules that import each other, largest first.
@@ -122,11 +145,15 @@ def graph() -> Graph:
     for path in paths:
         module = _module_name(path)
         text = path.read_text(encoding="utf-8")
-        result.lines[module] = len(text.splitlines())
+        lines = text.splitlines()
+        result.lines[module] = len(lines)
         tree = ast.parse(text, str(path))
         package = module if path.name == "__init__.py" else module.rpartition(".")[0]
         top_level = set(map(id, tree.body))
-        _count_functions(tree, module, result.functions)
+        said = reason(lines, tree, MODULE_LINES)
+        if said is not None:
+            result.reasons[module] = said
+        _count_functions(tree, module, lines, result)
         for node in ast.walk(tree):
             named = _named_module(node)
             if named is not None:
@@ -177,16 +204,55 @@ def _named_module(node: ast.AST) -> str | None:
     return None
 
 
-def _count_functions(tree: ast.AST, module: str, found: Dict[str, int], prefix: str = "") -> None:
+def _count_functions(
+    tree: ast.AST, module: str, lines: List[str], result: Graph, prefix: str = ""
+) -> None:
     """Each function's and method's lines (decorators left out), by ``module:Class.name``."""
     for node in ast.iter_child_nodes(tree):
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-            found[f"{module}:{prefix}{node.name}"] = node.end_lineno - node.lineno + 1
-            _count_functions(node, module, found, f"{prefix}{node.name}.")
+            name = f"{module}:{prefix}{node.name}"
+            result.functions[name] = node.end_lineno - node.lineno + 1
+            said = reason(lines, node, FUNCTION_LINES)
+            if said is not None:
+                result.reasons[name] = said
+            _count_functions(node, module, lines, result, f"{prefix}{node.name}.")
         elif isinstance(node, ast.ClassDef):
-            _count_functions(node, module, found, f"{prefix}{node.name}.")
+            _count_functions(node, module, lines, result, f"{prefix}{node.name}.")
         else:
-            _count_functions(node, module, found, prefix)
+            _count_functions(node, module, lines, result, prefix)
+
+
+def reason(lines: List[str], node: ast.AST, limit: int) -> str | None:
+    """The reason a module or function gives for being over ``limit`` lines (module doc).
+
+    Args:
+        lines: the module's source, line by line.
+        node: the module (:class:`ast.Module`) or the function.
+        limit: :data:`MODULE_LINES` or :data:`FUNCTION_LINES`, the number the comment names.
+
+    Returns:
+        The sentence after ``# Over LIMIT lines:``, its comment lines joined; None if the
+        comment is not at the top or its sentence has no full stop.
+    """
+    body = getattr(node, "body", [])
+    docstring = ast.get_docstring(node, clean=False) is not None  # type: ignore[arg-type]
+    # Only comments stand after the docstring (or the def line) and before the first statement.
+    first = body[0].end_lineno if docstring else getattr(node, "lineno", 1) - 1
+    statements = body[1:] if docstring else body
+    last = statements[0].lineno - 1 if statements else getattr(node, "end_lineno", len(lines))
+    marker = f"# Over {limit} lines:"
+    top = [line.strip() for line in lines[first:last]]
+    for index, line in enumerate(top):
+        if not line.startswith(marker):
+            continue
+        words = [line[len(marker) :].strip()]
+        for more in top[index + 1 :]:
+            if words[-1].endswith(".") or not more.startswith("#"):
+                break
+            words.append(more.lstrip("#").strip())
+        said = " ".join(word for word in words if word)
+        return said if said.endswith(".") and len(said) > 1 else None
+    return None
 
 
 def _in_type_checking(tree: ast.Module, node: ast.AST) -> bool:
@@ -214,6 +280,26 @@ def robot_to_laptop(found: Graph) -> List[str]:
     return sorted(said)
 
 
+def _over(sizes: Dict[str, int], limit: int) -> List[str]:
+    """The names whose size is over ``limit``, largest first."""
+    return sorted(
+        (name for name, size in sizes.items() if size > limit), key=lambda name: -sizes[name]
+    )
+
+
+def without_reason(found: Graph) -> Tuple[List[str], List[str]]:
+    """The long modules and functions that do not say why they are so long, largest first.
+
+    Returns:
+        The modules over :data:`MODULE_LINES` lines and the functions over
+        :data:`FUNCTION_LINES` with no reason at their top (module doc).
+    """
+    return (
+        [module for module in _over(found.lines, MODULE_LINES) if module not in found.reasons],
+        [name for name in _over(found.functions, FUNCTION_LINES) if name not in found.reasons],
+    )
+
+
 def report(found: Graph) -> str:
     """The structure in a few lines, for people."""
     rooms: Dict[str, int] = defaultdict(int)
@@ -234,18 +320,19 @@ def report(found: Graph) -> str:
     robot = robot_to_laptop(found)
     lines.append(f"arrows from the robot's modules to the laptop's packages: {len(robot)}")
     lines += [f"  {arrow}" for arrow in robot]
-    long_modules = sorted(
-        (module for module, count in found.lines.items() if count > MODULE_LINES),
-        key=lambda module: -found.lines[module],
+    long_modules, long_functions = (
+        _over(found.lines, MODULE_LINES),
+        _over(found.functions, FUNCTION_LINES),
     )
     lines.append(f"modules over {MODULE_LINES} lines: {len(long_modules)}")
     lines += [f"  {module:40s} {found.lines[module]:6d}" for module in long_modules]
-    long_functions = sorted(
-        (name for name, count in found.functions.items() if count > FUNCTION_LINES),
-        key=lambda name: -found.functions[name],
-    )
     lines.append(f"functions over {FUNCTION_LINES} lines: {len(long_functions)}")
     lines += [f"  {name:64s} {found.functions[name]:4d}" for name in long_functions]
+    modules, functions = without_reason(found)
+    lines.append(f"modules over {MODULE_LINES} lines with no reason: {len(modules)}")
+    lines += [f"  {module:40s} {found.lines[module]:6d}" for module in modules]
+    lines.append(f"functions over {FUNCTION_LINES} lines with no reason: {len(functions)}")
+    lines += [f"  {name:64s} {found.functions[name]:4d}" for name in functions]
     return "\n".join(lines)
 
 

@@ -155,6 +155,74 @@ def test_import_duckielib_loads_nothing_heavy():
     assert result.stdout.strip() == "[]"
 
 
+def _imported_at_load(path: Path) -> set[str]:
+    """The packages a module imports when it is loaded: not in functions, not for types."""
+    import ast
+
+    found: set[str] = set()
+    waiting: list[ast.AST] = list(ast.parse(path.read_text(), str(path)).body)
+    while waiting:
+        node = waiting.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            continue
+        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
+            waiting += node.orelse
+            continue
+        if isinstance(node, ast.Import):
+            found.update(alias.name.split(".")[0] for alias in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            found.add(node.module.split(".")[0])
+        waiting += ast.iter_child_nodes(node)
+    return found - {"__future__"}
+
+
+def test_the_load_time_imports_leave_out_functions_and_types(tmp_path):
+    module = tmp_path / "probe.py"
+    module.write_text(
+        "from __future__ import annotations\n"
+        "import json, numpy.linalg\n"
+        "from typing import TYPE_CHECKING\n"
+        "if TYPE_CHECKING:\n    import pandas\nelse:\n    import scipy\n"
+        "try:\n    import yaml\nexcept ImportError:\n    pass\n"
+        "class Kept:\n    import zmq\n    def later(self):\n        import nbformat\n"
+        "def lazy():\n    import matplotlib\n"
+        "from . import sibling\n"
+    )
+    assert _imported_at_load(module) == {"json", "numpy", "typing", "scipy", "yaml", "zmq"}
+
+
+#: What runs inside the grader's sandbox: its server's package, and the calls' kernel side.
+INSIDE_THE_SANDBOX = ROOT / "autograder" / "sandbox" / "inside"
+
+
+def test_code_inside_the_sandbox_imports_only_the_standard_library_at_load():
+    # The server forks the kernel zygote before anything else is imported, and the guard and
+    # the calls run in the student's kernel: at load, the standard library and each other only.
+    files = [*sorted(INSIDE_THE_SANDBOX.glob("*.py")), ROOT / "autograder" / "calls.py"]
+    outside = {
+        f"{path.relative_to(ROOT).as_posix()} imports {package}"
+        for path in files
+        for package in _imported_at_load(path)
+        if package not in sys.stdlib_module_names | {"inside"}  # the package, by its own name
+    }
+    assert outside == set()
+    # And as the sandbox loads them (the package named `inside`): nothing else comes along.
+    script = (
+        "import sys\n"
+        f"sys.path[0] = {str(INSIDE_THE_SANDBOX.parent)!r}\n"
+        "before = set(sys.modules)\n"
+        "import inside.serve, inside.seam, inside.guard, inside.wire\n"
+        "print(sorted(name for name in set(sys.modules) - before\n"
+        "             if name.split('.')[0] not in sys.stdlib_module_names | {'inside'}))\n"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, check=True, timeout=60
+    )
+    assert result.stdout.strip() == "[]"
+    loaded = {path.stem for path in INSIDE_THE_SANDBOX.glob("*.py")} - {"__init__", "__main__"}
+    assert loaded == {"serve", "seam", "guard", "wire", "notebook", "zygote", "processes"}
+
+
 def test_ruff_lint_is_clean():
     result = subprocess.run(
         [tool("ruff"), "check", "--no-cache", str(ROOT)],
@@ -271,6 +339,44 @@ def test_the_import_graph_sees_a_module_named_for_importlib():
     ]
     found = [_named_module(ast.parse(call, mode="eval").body) for call in calls]
     assert found == ["duckielib.libraries", "duckielib.libraries.tf", "duckielib.bags", None, None]
+
+
+def test_every_long_module_and_function_says_why():
+    # The house's limits: a module over 600 lines or a function over 80 says at its top why
+    # (where and how: tests/import_graph.py's docstring).
+    from import_graph import graph, without_reason
+
+    modules, functions = without_reason(graph())
+    assert modules == []
+    assert functions == []
+
+
+def test_the_import_graph_reads_a_reason_only_where_it_belongs():
+    import ast
+
+    from import_graph import reason
+
+    def module(source: str) -> str | None:
+        return reason(source.splitlines(), ast.parse(source), 600)
+
+    def function(source: str) -> str | None:
+        return reason(source.splitlines(), ast.parse(source).body[-1], 80)
+
+    assert module('"""Doc."""\n\n# Over 600 lines: one idea.\n\nimport os\n') == "one idea."
+    assert module("# Over 600 lines: one idea,\n# said twice.\nimport os\n") == (
+        "one idea, said twice."
+    )
+    assert module('"""Doc."""\n# Over 600 lines: no full stop\nimport os\n') is None
+    assert module('"""Doc."""\nimport os\n# Over 600 lines: too late.\n') is None
+    assert module('"""Doc."""\n# Over 80 lines: the wrong limit.\nimport os\n') is None
+    body = '    """Doc.\n\n    More.\n    """\n    # Over 80 lines: one loop.\n    return 1\n'
+    assert function(f"@decorated\ndef f(\n    a,\n):\n{body}") == "one loop."
+    assert function("def f():\n    # Over 80 lines: one loop,\n    # for speed.\n    pass\n") == (
+        "one loop, for speed."
+    )
+    assert function('def f():\n    """Doc."""\n    x = 1\n    # Over 80 lines: late.\n') is None
+    assert function('# Over 80 lines: above.\ndef f():\n    """Doc."""\n') is None
+    assert function('def f():\n    """Doc."""\n    # Over 80 lines: .\n    pass\n') is None
 
 
 def test_the_served_libraries_are_the_ones_pyproject_registers():

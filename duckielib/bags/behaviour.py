@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Set, Tuple, Union
 
 import numpy as np
 
@@ -357,14 +357,7 @@ def mission_report(
     state_topic = state_topic or namespace + "mission_node/state"
     report = MissionReport(mission)
     topics = set(bag.topics)
-    if state_topic not in topics:
-        report.problems.append(
-            f"The bag has no {state_topic}: the mission node must publish each state's name "
-            "there (std_msgs/String) when the state starts."
-        )
-        announcements: List[Tuple[float, str]] = []
-    else:
-        announcements = [(item.time, item.message.data) for item in bag.read(state_topic)]
+    announcements = _announcements(bag, state_topic, topics, report)
     led_topic = namespace + "led_emitter_node/led_pattern"
     leds = _led_changes(bag, led_topic) if led_topic in topics else []
     tracks = pose_tracks(bag, "record") if tracks is None else tracks
@@ -382,21 +375,7 @@ def mission_report(
         + [0.0]
     )
     end_time = done[0] if done else last_time
-    for index, (start, name) in enumerate(states):
-        end = states[index + 1][0] if index + 1 < len(states) else end_time
-        # The colour shown once the state has begun: half a second in (or half-way through
-        # a shorter state), so the order of the LED call and the announcement does not matter.
-        seen_at = min(start + 0.5, (start + end) / 2)
-        shown = [color for t, color in leds if t <= seen_at]
-        report.states.append(
-            StateRun(
-                name=name,
-                color=shown[-1] if shown else "unknown",
-                start=start - t0,
-                end=end - t0,
-                moved=_moved(truth, start, end),
-            )
-        )
+    report.states += _state_runs(states, end_time, leds, truth, t0)
     report.total_time = (end_time - t0) if announcements else 0.0
     if done and truth is not None:
         report.after_done = _after_done(truth, done[0])
@@ -414,6 +393,53 @@ def mission_report(
         report.distance_to_start = math.hypot(x - mission.start[0], y - mission.start[1])
     report.problems += _problems(report)
     return report
+
+
+def _announcements(
+    bag: Bag, state_topic: str, topics: Set[str], report: MissionReport
+) -> List[Tuple[float, str]]:
+    """The states announced on ``state_topic``: (record time, name), in order.
+
+    A bag without the topic (not in ``topics``, the bag's) has none, and ``report`` says so
+    in its problems.
+    """
+    if state_topic not in topics:
+        report.problems.append(
+            f"The bag has no {state_topic}: the mission node must publish each state's name "
+            "there (std_msgs/String) when the state starts."
+        )
+        return []
+    return [(item.time, item.message.data) for item in bag.read(state_topic)]
+
+
+def _state_runs(
+    states: List[Tuple[float, str]],
+    end_time: float,
+    leds: List[Tuple[float, str]],
+    truth: Optional[PoseTrack],
+    t0: float,
+) -> List[StateRun]:
+    """Each announced state as it ran: its colour, its times from ``t0`` and how far it moved.
+
+    A state ends where the next begins, the last at ``end_time`` (record times, seconds).
+    """
+    runs = []
+    for index, (start, name) in enumerate(states):
+        end = states[index + 1][0] if index + 1 < len(states) else end_time
+        # The colour shown once the state has begun: half a second in (or half-way through
+        # a shorter state), so the order of the LED call and the announcement does not matter.
+        seen_at = min(start + 0.5, (start + end) / 2)
+        shown = [color for t, color in leds if t <= seen_at]
+        runs.append(
+            StateRun(
+                name=name,
+                color=shown[-1] if shown else "unknown",
+                start=start - t0,
+                end=end - t0,
+                moved=_moved(truth, start, end),
+            )
+        )
+    return runs
 
 
 def _intervals(changes: List[Tuple[float, bool]], end: float) -> List[Tuple[float, float]]:

@@ -26,6 +26,9 @@ topic's ``topic``, ``type``, ``md5sum`` and ``message_definition``.
 Laptop side; never deployed (the robot has the real rosbag).
 """
 
+# Over 600 lines: it stands in for ROS's rosbag Python API, one module robot code imports by that
+# name, whose `Bag` reads, writes and appends.
+
 from __future__ import annotations
 
 import collections

@@ -33,6 +33,9 @@ projections, reflections, shears, arcballs); axes are given by name, not as tupl
 Laptop side; never deployed (the robot has the real tf).
 """
 
+# Over 600 lines: it stands in for ROS's tf, one module robot code imports by that name, with
+# `tf.transformations` (the rotation and matrix functions, about 300 lines) built inside it.
+
 from __future__ import annotations
 
 import math

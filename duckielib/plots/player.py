@@ -20,6 +20,10 @@ button and the whole mat are in view together.
 Like every module of :mod:`duckielib.plots`, it runs on the laptop only.
 """
 
+# Over 600 lines: one player, whose recording (a run read from its bag), the frame it draws and
+# the notebook's controls share the frame's layout; the Recording class (about 160 lines) is
+# the seam to split along should it grow.
+
 from __future__ import annotations
 
 import io

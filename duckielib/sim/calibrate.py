@@ -24,6 +24,9 @@ robot.json`` then drives a simulated robot that behaves like yours.
 Laptop side; never deployed.
 """
 
+# Over 600 lines: one fit of the motors to a bag (its runs, the motor model, the residuals and the
+# least squares) beside the calibration drive it expects and the recorded samples that check it.
+
 from __future__ import annotations
 
 import math

@@ -35,6 +35,7 @@ from duckielib.bags.analysis import (
     odometry_of_streams,
 )
 from duckielib.errors import BagError
+from duckielib.sim.encoders import EncoderReading
 from duckielib.sim.noise import NoiseProfile, noise_profile
 from duckielib.sim.simulator import Simulator
 from duckielib.sim.world import World
@@ -310,32 +311,9 @@ def replay_bag(
         start_pose=(_OPEN_FLOOR.width / 2, _OPEN_FLOOR.height / 2, 0.0),
         trace_rate_hz=0 if solution is None else 50.0,
     )
-    readings = []
-    for when, left, right in zip(commands.t - origin, commands.left, commands.right):
-        sim.run_until(when)
-        sim.set_wheel_duties(float(left), float(right))
-        readings += sim.pop_encoder_readings()
-    sim.run_until(end - origin)
-    readings += sim.pop_encoder_readings()
-    # The simulated encoders' own readings, each read at the bag's reading times (the last
-    # one at or before each): with the bag's own seed and profile, the very same counts.
-    sampled = []
-    for wheel, (t, _) in zip(("left", "right"), kept):
-        own = [(r.time, r.ticks) for r in readings if r.wheel == wheel]
-        own_t = np.array([0.0] + [time for time, _ in own])
-        own_ticks = np.array([own[0][1] if own else 0] + [ticks for _, ticks in own], np.int64)
-        at = np.searchsorted(own_t, t - origin + 1e-9, side="right") - 1
-        sampled.append(own_ticks[np.clip(at, 0, len(own_ticks) - 1)])
-    sides = []
-    errors = []
-    for wheel, (t, real_counts), sim_counts in zip(("left", "right"), kept, sampled):
-        real = real_counts - real_counts[0]
-        simulated = sim_counts - sim_counts[0]
-        error = _rate_error(t, real.astype(float), simulated.astype(float))
-        errors.append(error)
-        real_travel, sim_travel = _travel(real), _travel(simulated)
-        ratio = sim_travel / real_travel if real_travel else math.nan
-        sides.append(WheelReplay(wheel, real_travel, sim_travel, ratio, _rms(error)))
+    readings = _replayed(sim, commands, origin, end)
+    sampled = _sampled(readings, kept, origin)
+    sides, errors = _compared(kept, sampled)
     paths = None
     if solution is not None:
         resolution = encoder_resolution(bag, *streams)
@@ -355,6 +333,58 @@ def replay_bag(
         paths=paths,
         notes=tuple(notes),
     )
+
+
+def _replayed(
+    sim: Simulator, commands: Commands, origin: float, end: float
+) -> List[EncoderReading]:
+    """The simulated encoders' readings as ``sim`` follows ``commands`` until ``end``.
+
+    ``origin`` is the bag's time at the simulator's 0 s; times in seconds.
+    """
+    readings: List[EncoderReading] = []
+    for when, left, right in zip(commands.t - origin, commands.left, commands.right):
+        sim.run_until(when)
+        sim.set_wheel_duties(float(left), float(right))
+        readings += sim.pop_encoder_readings()
+    sim.run_until(end - origin)
+    readings += sim.pop_encoder_readings()
+    return readings
+
+
+def _sampled(
+    readings: List[EncoderReading], kept: List[Tuple[np.ndarray, np.ndarray]], origin: float
+) -> List[np.ndarray]:
+    """The simulated counts of each wheel (left, right) at the bag's reading times.
+
+    The simulated encoders' own readings, each read at the bag's reading times (the last one
+    at or before each): with the bag's own seed and profile, the very same counts.
+    """
+    sampled = []
+    for wheel, (t, _) in zip(("left", "right"), kept):
+        own = [(r.time, r.ticks) for r in readings if r.wheel == wheel]
+        own_t = np.array([0.0] + [time for time, _ in own])
+        own_ticks = np.array([own[0][1] if own else 0] + [ticks for _, ticks in own], np.int64)
+        at = np.searchsorted(own_t, t - origin + 1e-9, side="right") - 1
+        sampled.append(own_ticks[np.clip(at, 0, len(own_ticks) - 1)])
+    return sampled
+
+
+def _compared(
+    kept: List[Tuple[np.ndarray, np.ndarray]], sampled: List[np.ndarray]
+) -> Tuple[List[WheelReplay], List[np.ndarray]]:
+    """Each wheel's travel, real and simulated, and its tick rate errors over time."""
+    sides = []
+    errors = []
+    for wheel, (t, real_counts), sim_counts in zip(("left", "right"), kept, sampled):
+        real = real_counts - real_counts[0]
+        simulated = sim_counts - sim_counts[0]
+        error = _rate_error(t, real.astype(float), simulated.astype(float))
+        errors.append(error)
+        real_travel, sim_travel = _travel(real), _travel(simulated)
+        ratio = sim_travel / real_travel if real_travel else math.nan
+        sides.append(WheelReplay(wheel, real_travel, sim_travel, ratio, _rms(error)))
+    return sides, errors
 
 
 def compared_readings(

@@ -127,6 +127,50 @@ def _check_duty(value: object, wheel: str) -> float:
     return duty
 
 
+def _checked_start(
+    world: World,
+    start_pose: Sequence[float],
+    physics_rate_hz: float,
+    trace_rate_hz: float,
+) -> Tuple[float, float, float]:
+    """The start pose (x, y in metres, theta in radians), once the simulator's settings hold.
+
+    Raises:
+        ConfigError: if a rate is too low or not a number, or the pose is not finite or off
+            ``world``'s mat.
+    """
+    if not (math.isfinite(physics_rate_hz) and physics_rate_hz >= 10):
+        raise ConfigError(
+            f"physics_rate_hz must be at least 10 Hz, not {physics_rate_hz!r} "
+            "(100 to 200 Hz is a good choice)."
+        )
+    if not (math.isfinite(trace_rate_hz) and trace_rate_hz >= 0):
+        raise ConfigError(f"trace_rate_hz must be a number of Hz >= 0, not {trace_rate_hz!r}.")
+    x, y, theta = (float(value) for value in start_pose)
+    if not all(math.isfinite(value) for value in (x, y, theta)):
+        raise ConfigError(f"The start pose must be finite numbers, not {tuple(start_pose)!r}.")
+    if not world.contains(x, y):
+        raise ConfigError(
+            f"The start pose ({x}, {y}) is off the mat, which spans [0, {world.width}] x "
+            f"[0, {world.height}] m; start on the mat or make the world bigger."
+        )
+    return x, y, theta
+
+
+def _initial_ticks(given: Optional[Tuple[int, int]], rng: np.random.Generator) -> Tuple[int, int]:
+    """The encoders' counts at power-on: ``given``, or drawn from ``rng`` when None.
+
+    Raises:
+        ConfigError: if ``given`` is not two integers.
+    """
+    if given is None:
+        low, high = _INITIAL_TICKS_RANGE
+        return (int(rng.integers(low, high)), int(rng.integers(low, high)))
+    if len(given) != 2 or not all(isinstance(t, int) for t in given):
+        raise ConfigError(f"initial_ticks must be two integers (left, right), not {given!r}.")
+    return given
+
+
 class Simulator:
     """A simulated Duckiebot on a Duckietown mat.
 
@@ -164,34 +208,14 @@ class Simulator:
         self.noise = noise_profile(noise)
         self.config = config
         self.world = World() if world is None else world
-        if not (math.isfinite(physics_rate_hz) and physics_rate_hz >= 10):
-            raise ConfigError(
-                f"physics_rate_hz must be at least 10 Hz, not {physics_rate_hz!r} "
-                "(100 to 200 Hz is a good choice)."
-            )
-        if not (math.isfinite(trace_rate_hz) and trace_rate_hz >= 0):
-            raise ConfigError(f"trace_rate_hz must be a number of Hz >= 0, not {trace_rate_hz!r}.")
-        x, y, theta = (float(value) for value in start_pose)
-        if not all(math.isfinite(value) for value in (x, y, theta)):
-            raise ConfigError(f"The start pose must be finite numbers, not {tuple(start_pose)!r}.")
-        if not self.world.contains(x, y):
-            raise ConfigError(
-                f"The start pose ({x}, {y}) is off the mat, which spans [0, {self.world.width}] x "
-                f"[0, {self.world.height}] m; start on the mat or make the world bigger."
-            )
+        x, y, theta = _checked_start(self.world, start_pose, physics_rate_hz, trace_rate_hz)
         self.physics_rate_hz = float(physics_rate_hz)
         self.dt = 1.0 / self.physics_rate_hz
         self._steps = 0
 
         root = np.random.default_rng(seed)
         left_rng, right_rng, start_rng = root.spawn(3)
-        if initial_ticks is None:
-            low, high = _INITIAL_TICKS_RANGE
-            initial_ticks = (int(start_rng.integers(low, high)), int(start_rng.integers(low, high)))
-        elif len(initial_ticks) != 2 or not all(isinstance(t, int) for t in initial_ticks):
-            raise ConfigError(
-                f"initial_ticks must be two integers (left, right), not {initial_ticks!r}."
-            )
+        initial_ticks = _initial_ticks(initial_ticks, start_rng)
 
         self.space = build_space(self.world)
         self.robot = Robot(

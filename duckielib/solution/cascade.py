@@ -49,6 +49,10 @@ Typical use, once per class::
 This module imports only the standard library (it ships with the robot's copy of the package).
 """
 
+# Over 600 lines: one analysis of the course's notebooks (their cells' names, load_solution's parts,
+# the transitive dependencies and the cascades they explain) whose steps feed each other through
+# `_Builder`.
+
 from __future__ import annotations
 
 import ast

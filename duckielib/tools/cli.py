@@ -6,6 +6,9 @@ SIGTERM end a command as cleanly as its own end would (a mission's bag is closed
 its wheels stopped), with a sentence and status 130 or 143.
 """
 
+# Over 600 lines: the whole `duckie` command line, each command's options beside the thin handler
+# that runs it; the bag commands (about 300 lines with their parsers) are the seam to split along.
+
 from __future__ import annotations
 
 import argparse
@@ -818,18 +821,15 @@ def _add_bag_writers(bag_commands: argparse._SubParsersAction) -> None:
     convert.set_defaults(handler=_bag_convert)
 
 
-def _parser() -> argparse.ArgumentParser:
-    from duckielib.missions import TASK_START
+#: The ``--time-base`` option of the ``duckie bag`` commands that read poses or ticks.
+_TIME_BASE: Dict[str, Any] = {
+    "choices": ("auto", "header", "record"),
+    "default": "auto",
+    "help": "times to use: header stamps, record times, or auto (stamps unless all 0)",
+}
 
-    parser = argparse.ArgumentParser(
-        prog="duckie",
-        description="Tools of the Duckiebot ROS course.",
-    )
-    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
-    _add_mission(commands)
-    _add_run(commands)
-
+def _add_export(commands: argparse._SubParsersAction) -> None:
     export = commands.add_parser(
         "export", help="collect the graded functions of your notebooks into one solution module"
     )
@@ -837,10 +837,17 @@ def _parser() -> argparse.ArgumentParser:
     export.add_argument("-o", "--output", required=True, help="the .py file to write")
     export.set_defaults(handler=_export)
 
-    _add_handin(commands)
 
+def _add_bag(commands: argparse._SubParsersAction) -> None:
     bag = commands.add_parser("bag", help="inspect, plot, replay and repair ROS 1 bags")
     bag_commands = bag.add_subparsers(dest="bag_command", metavar="BAG_COMMAND", required=True)
+    _add_bag_readers(bag_commands)
+    _add_bag_odometry(bag_commands)
+    _add_bag_writers(bag_commands)
+
+
+def _add_bag_readers(bag_commands: argparse._SubParsersAction) -> None:
+    """The ``duckie bag`` commands that show a bag: ``info``, ``plot`` and ``animate``."""
     info = bag_commands.add_parser("info", help="topics, types, counts and duration of a bag")
     info.add_argument("bag", help="the bag file")
     info.add_argument(
@@ -852,16 +859,11 @@ def _parser() -> argparse.ArgumentParser:
     )
     info.set_defaults(handler=_bag_info)
 
-    time_base: Dict[str, Any] = {
-        "choices": ("auto", "header", "record"),
-        "default": "auto",
-        "help": "times to use: header stamps, record times, or auto (stamps unless all 0)",
-    }
     plot = bag_commands.add_parser("plot", help="plot the poses (Pose2DStamped topics) of a bag")
     plot.add_argument("bag", help="the bag file")
     plot.add_argument("-o", "--output", required=True, help="the figure to write (.png/.svg/.pdf)")
     plot.add_argument("--topic", action="append", help="a pose topic to plot (default: all)")
-    plot.add_argument("--time-base", **time_base)
+    plot.add_argument("--time-base", **_TIME_BASE)
     plot.set_defaults(handler=_bag_plot)
 
     animate = bag_commands.add_parser(
@@ -879,6 +881,10 @@ def _parser() -> argparse.ArgumentParser:
         "--seconds", type=float, default=12.0, help="how long the animation lasts (default 12)"
     )
     animate.set_defaults(handler=_bag_animate)
+
+
+def _add_bag_odometry(bag_commands: argparse._SubParsersAction) -> None:
+    from duckielib.missions import TASK_START
 
     odometry = bag_commands.add_parser(
         "odometry", help="replay wheel odometry from a bag's encoder ticks"
@@ -898,7 +904,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     odometry.add_argument("--left", help="the left encoder topic (default: found by name)")
     odometry.add_argument("--right", help="the right encoder topic (default: found by name)")
-    odometry.add_argument("--time-base", **time_base)
+    odometry.add_argument("--time-base", **_TIME_BASE)
     odometry.add_argument(
         "--json", action="store_true", help='print {"x": .., "y": .., "theta": ..}'
     )
@@ -909,8 +915,19 @@ def _parser() -> argparse.ArgumentParser:
     )
     odometry.set_defaults(handler=_bag_odometry)
 
-    _add_bag_writers(bag_commands)
 
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="duckie",
+        description="Tools of the Duckiebot ROS course.",
+    )
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    _add_mission(commands)
+    _add_run(commands)
+    _add_export(commands)
+    _add_handin(commands)
+    _add_bag(commands)
     _add_robot(commands)
     _add_simulator(commands)
 

@@ -10,6 +10,9 @@ that ``duckie grade`` takes, after saying what is unfinished.
 Laptop only: it needs Jupyter (nbclient, nbformat and the ``python3`` kernel).
 """
 
+# Over 600 lines: one path behind `duckie handin` and `duckie submit`: running each notebook as the
+# grader does, checking the whole course and writing the zip, sharing what a run found.
+
 from __future__ import annotations
 
 import math

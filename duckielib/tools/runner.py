@@ -21,6 +21,9 @@ fails, or the mission does not end in time) still writes its bag, figure and sum
 with the error in the summary, so what the robot did until then can be looked at and scored.
 """
 
+# Over 600 lines: a mission run from launching its nodes to its bag, figure, animation and summary,
+# whose steps share the run's folder and the way a failure is said and still written.
+
 from __future__ import annotations
 
 import contextlib

@@ -3,6 +3,9 @@
 Laptop side; never deployed.
 """
 
+# Over 600 lines: one reader turns a launcher's shell lines and roslaunch's XML (substitutions,
+# scopes, includes) into the same node specs, as roslaunch reads them.
+
 from __future__ import annotations
 
 import os

@@ -270,26 +270,9 @@ def run_project(
         stages = _Stages(bot, launched.nodes, ended)
         recorder = BagRecorder(files["bag"], graph=graph, exclude=_NOT_RECORDED)
         graph.topic_watchers.append(_recording_new_topics(recorder))
-        failures: List[str] = []
-        interrupt: Optional[KeyboardInterrupt] = None
-        view = None
-        try:
-            view = None if live is None else live(bot)
-            _drive(
-                bot, stages, seconds, lambda error: failures.append(_crash_said(error, workspace))
-            )
-        except KeyboardInterrupt as error:  # Ctrl-C: stop as at the end, then say so
-            interrupt = error
-        finally:
-            at_end = {**_waiting(graph), **ended}
-            bot.shutdown()
-            if view is not None:
-                view.close()
-            recorder.close()
-            files["log"].write_text(
-                "\n".join(repr(record) for record in graph.log) + "\n", encoding="utf-8"
-            )
-            sys.path[:] = path_before
+        at_end, failures, interrupt = _drive_to_the_end(
+            bot, stages, recorder, workspace, files, live, seconds, path_before
+        )
     run = ProjectRun(
         folder=folder,
         nodes={
@@ -311,6 +294,47 @@ def run_project(
         interrupt.run = run  # type: ignore[attr-defined]  # what ran, for the command to print
         raise interrupt
     return run
+
+
+def _drive_to_the_end(
+    bot: Any,
+    stages: _Stages,
+    recorder: Any,
+    workspace: Workspace,
+    files: Dict[str, Path],
+    live: Optional[Callable[[Any], Any]],
+    seconds: float,
+    path_before: List[str],
+) -> Tuple[Dict[str, str], List[str], Optional[KeyboardInterrupt]]:
+    """Drive the started nodes until the run is over; then stop everything, however it ends.
+
+    The robot is shut down, the live view and the bag closed, the log written and
+    ``sys.path`` put back.
+
+    Returns:
+        How each node stood at the end (:func:`_waiting`, by label), the failures said, and
+        the Ctrl-C that ended the run if one did.
+    """
+    graph = bot.graph
+    failures: List[str] = []
+    interrupt: Optional[KeyboardInterrupt] = None
+    view = None
+    try:
+        view = None if live is None else live(bot)
+        _drive(bot, stages, seconds, lambda error: failures.append(_crash_said(error, workspace)))
+    except KeyboardInterrupt as error:  # Ctrl-C: stop as at the end, then say so
+        interrupt = error
+    finally:
+        at_end = {**_waiting(graph), **stages.ended}
+        bot.shutdown()
+        if view is not None:
+            view.close()
+        recorder.close()
+        files["log"].write_text(
+            "\n".join(repr(record) for record in graph.log) + "\n", encoding="utf-8"
+        )
+        sys.path[:] = path_before
+    return at_end, failures, interrupt
 
 
 class _Stages:
