@@ -1,8 +1,9 @@
 """Start the sandbox's server: ``python autograder/sandbox/inside --serve CELL_SECONDS``.
 
 Run as a folder, this file's folder comes first on ``sys.path``; its parent takes that place,
-so the package imports itself as ``inside`` (its modules import one another relatively) and
-nothing else of the grader is in reach. The zygote takes that entry out of the kernels' path.
+so the package imports itself as ``inside`` (its modules import one another relatively). In
+the sandbox that parent holds this package alone: nothing else of the grader is there to
+import. The zygote takes that entry out of the kernels' path.
 """
 
 import sys
