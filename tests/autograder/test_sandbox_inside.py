@@ -62,13 +62,17 @@ def test_every_private_part_the_seam_lists_is_there():
 
 def test_a_missing_private_part_is_named_with_the_versions_to_install(monkeypatch):
     lacking = (
-        ("jupyter_client.manager", "AsyncKernelManager", "_async_gone", "a test"),
-        ("jupyter_client.nowhere", "Manager", "start", "a test"),
-        ("nbclient", "NotebookClient", "nb", "a test"),
+        ("jupyter_client.manager", "AsyncKernelManager", "_async_gone", "calls", "a test"),
+        ("jupyter_client.nowhere", "Manager", "start", "calls", "a test"),
+        ("nbclient", "NotebookClient", "nb", "reads", "a test"),
+        # Only set, as the usual launch sets it: a version without it does not read it.
+        ("jupyter_client.provisioning", "LocalProvisioner", "gone", "sets", "a test"),
+        ("jupyter_client.provisioning", "GoneProvisioner", "pid", "sets", "a test"),
     )
     assert seam.missing(lacking) == [
         "jupyter_client.manager.AsyncKernelManager._async_gone",
         "jupyter_client.nowhere.Manager",
+        "jupyter_client.provisioning.GoneProvisioner",
     ]
     monkeypatch.setattr(seam, "PRIVATE", lacking)
     with pytest.raises(seam.SeamError) as raised:
@@ -77,6 +81,21 @@ def test_a_missing_private_part_is_named_with_the_versions_to_install(monkeypatc
     assert "AsyncKernelManager._async_gone" in said
     assert f"jupyter_client=={seam.CHECKED['jupyter_client'][-1]}" in said
     assert f"nbclient=={seam.CHECKED['nbclient'][-1]}" in said
+
+
+def test_every_listed_use_is_one_the_seam_knows():
+    assert {entry[3] for entry in seam.PRIVATE} <= {"overrides", "calls", "reads", "sets"}
+    # Every private method the seam's classes override is listed as overridden.
+    manager = seam.forking_manager_class(zygote=None)  # type: ignore[arg-type]
+    provisioner = seam._forked_provisioner_class(zygote=None)  # type: ignore[arg-type]
+    private = {
+        name
+        for cls in (manager, manager.client_factory, provisioner)
+        for name, value in vars(cls).items()
+        if name.startswith("_") and not name.startswith("__") and callable(value)
+    }
+    listed = {entry[2] for entry in seam.PRIVATE if entry[3] == "overrides"}
+    assert private == listed == {"_async_pre_start_kernel", "_async_wait"}
 
 
 def test_module_code_makes_a_module_and_leaves_the_namespace_alone():
@@ -114,7 +133,7 @@ def test_a_server_whose_seam_is_broken_says_so_for_every_notebook(tmp_path):
         f"sys.path[0] = {str(inside.parent)!r}\n"
         "sys.argv[1:] = ['--serve', '10']\n"
         "from inside import seam\n"
-        "seam.PRIVATE += (('nbclient', 'NotebookClient', 'gone', 'a test'),)\n"
+        "seam.PRIVATE += (('nbclient', 'NotebookClient', 'gone', 'reads', 'a test'),)\n"
         "from inside.serve import main\n"
         "main()\n"
     )

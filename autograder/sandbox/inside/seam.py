@@ -28,31 +28,35 @@ __all__ = ["CHECKED", "PRIVATE", "SeamError", "check", "forking_manager_class", 
 #: The versions of the packages whose private parts :data:`PRIVATE` lists, read and tested.
 CHECKED: Dict[str, Tuple[str, ...]] = {"jupyter_client": ("8.10.0",), "nbclient": ("0.11.0",)}
 
-#: ``(module, class, name, what for)``: each name beyond the documented API relied on here.
-#: The names of nbclient's client are attributes of an instance, the others of the class.
-PRIVATE: Tuple[Tuple[str, str, str, str], ...] = (
-    ("jupyter_client.manager", "AsyncKernelManager", "_async_pre_start_kernel",
-     "overridden: gives the manager the provisioner that forks the kernel"),
-    ("jupyter_client.manager", "AsyncKernelManager", "_async_wait",
-     "overridden: looks every 5 ms whether a killed kernel has ended, not every 100"),
-    ("jupyter_client.manager", "AsyncKernelManager", "provisioner",
-     "set before the start, so the manager keeps the forking provisioner"),
-    ("jupyter_client.asynchronous", "AsyncKernelClient", "_handle_kernel_info_reply",
-     "called by the shorter wait for a new kernel (PromptClient.wait_for_ready)"),
-    ("jupyter_client.asynchronous", "AsyncKernelClient", "_async_is_alive",
-     "called by the shorter wait for a new kernel"),
-    ("jupyter_client.provisioning", "LocalProvisioner", "pid",
-     "set to the forked kernel's process id"),
-    ("jupyter_client.provisioning", "LocalProvisioner", "pgid",
-     "set to the forked kernel's process group"),
-    ("jupyter_client.provisioning", "LocalProvisioner", "cwd",
-     "set to the forked kernel's working folder"),
-    ("jupyter_client.provisioning", "LocalProvisioner", "connection_info",
+#: ``(module, class, name, use, what for)``: each name beyond the documented API used here.
+#: ``use`` is how: ``overrides``, ``calls`` or ``reads`` (the name must be there), or ``sets``
+#: (set as the usual launch sets it: where a version lacks the name, it does not read it, and
+#: setting it changes nothing). The names of nbclient's client are attributes of an instance,
+#: the others of the class.
+PRIVATE: Tuple[Tuple[str, str, str, str, str], ...] = (
+    ("jupyter_client.manager", "AsyncKernelManager", "_async_pre_start_kernel", "overrides",
+     "gives the manager the provisioner that forks the kernel"),
+    ("jupyter_client.manager", "AsyncKernelManager", "_async_wait", "overrides",
+     "looks every 5 ms whether a killed kernel has ended, not every 100"),
+    ("jupyter_client.manager", "AsyncKernelManager", "provisioner", "reads",
+     "set before the start when none is, so the manager keeps the forking provisioner"),
+    ("jupyter_client.asynchronous", "AsyncKernelClient", "_handle_kernel_info_reply", "calls",
+     "the shorter wait for a new kernel (PromptClient.wait_for_ready)"),
+    ("jupyter_client.asynchronous", "AsyncKernelClient", "_async_is_alive", "calls",
+     "the shorter wait for a new kernel"),
+    ("jupyter_client.provisioning", "LocalProvisioner", "connection_info", "reads",
      "returned by the forking launch, as the usual launch returns it"),
-    ("nbclient", "NotebookClient", "nb",
+    ("jupyter_client.provisioning", "LocalProvisioner", "pid", "sets",
+     "the forked kernel's process id"),
+    ("jupyter_client.provisioning", "LocalProvisioner", "pgid", "sets",
+     "the forked kernel's process group"),
+    ("jupyter_client.provisioning", "LocalProvisioner", "cwd", "sets",
+     "the forked kernel's working folder (8.10 resolves the connection file against it)"),
+    ("nbclient", "NotebookClient", "nb", "reads",
      "the notebook; a hidden cell's run puts the notebook's own cell back in it"),
-    ("nbclient", "NotebookClient", "km", "the kernel manager, whose provisioner names the kernel"),
-    ("nbclient", "NotebookClient", "code_cells_executed",
+    ("nbclient", "NotebookClient", "km", "reads",
+     "the kernel manager, whose provisioner names the kernel"),
+    ("nbclient", "NotebookClient", "code_cells_executed", "reads",
      "counted up for a test cell the grader runs on its side"),
 )  # fmt: skip
 
@@ -61,10 +65,13 @@ class SeamError(RuntimeError):
     """The installed jupyter_client or nbclient lacks a private part the sandbox relies on."""
 
 
-def missing(private: Optional[Sequence[Tuple[str, str, str, str]]] = None) -> List[str]:
-    """What the installed packages lack of ``private`` (:data:`PRIVATE`): ``module.Class.name``."""
+def missing(private: Optional[Sequence[Tuple[str, str, str, str, str]]] = None) -> List[str]:
+    """What the installed packages lack of ``private`` (:data:`PRIVATE`): ``module.Class.name``.
+
+    A name the sandbox only ``sets`` is not looked for (see :data:`PRIVATE`); its class is.
+    """
     lacking = []
-    for module_name, class_name, name, _ in PRIVATE if private is None else private:
+    for module_name, class_name, name, use, _ in PRIVATE if private is None else private:
         try:
             owner: Any = getattr(importlib.import_module(module_name), class_name)
         except (ImportError, AttributeError):
@@ -74,7 +81,7 @@ def missing(private: Optional[Sequence[Tuple[str, str, str, str]]] = None) -> Li
             import nbformat
 
             owner = owner(nbformat.v4.new_notebook())
-        if not hasattr(owner, name):
+        if use != "sets" and not hasattr(owner, name):
             lacking.append(f"{module_name}.{class_name}.{name}")
     return list(dict.fromkeys(lacking))
 
