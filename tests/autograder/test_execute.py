@@ -309,3 +309,17 @@ def test_in_the_sandbox_what_a_notebook_leaves_running_is_gone_before_the_next(s
     replies = _serve(tmp_path, [("01_a", leave), ("02_b", look)], sandboxed=True)
     assert _printed(replies[0]) == ["started\n"]
     assert _printed(replies[1]) == ["gone\n"]
+
+
+def test_a_notebook_that_blocks_the_guards_note_is_still_run_and_graded(sandbox, tmp_path):
+    # The note lives in the sandbox's /tmp, where the student's code may put anything: a folder
+    # in its place must not cost the notebook its run.
+    block = _notebook(
+        ["import os\nos.mkdir('/tmp/.grader-writes')\nprint('blocked')", "print('graded')"],
+        tests=[1],
+    )
+    (reply,) = _serve(tmp_path, [("01_a", block)], sandboxed=True)
+    assert "notebook" in reply, reply
+    assert _printed(reply) == ["blocked\n", "graded\n"]
+    notebook = nbformat.reads(reply["notebook"], as_version=4)
+    assert notebook.metadata[METADATA_KEY]["problems"] == []
