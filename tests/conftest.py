@@ -74,6 +74,16 @@ def pytest_collection_modifyitems(config, items):
     items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
 
 
+def pytest_xdist_make_scheduler(config, log):
+    # Whole modules to each worker, as pytest-xdist's loadscope, but a worker's crash neither
+    # stalls the run nor runs the crashed test again (tests/scheduling.py).
+    if config.getvalue("dist") != "loadscope":
+        return None
+    from scheduling import CrashSafeScopes
+
+    return CrashSafeScopes(config, log)
+
+
 @pytest.hookimpl(hookwrapper=True)
 def pytest_runtest_makereport(item, call):
     outcome = yield
