@@ -5,8 +5,6 @@ from __future__ import annotations
 import importlib
 import os
 import shutil
-import signal
-import socket
 import subprocess
 import sys
 import time
@@ -17,6 +15,7 @@ from typing import Dict, Iterator, List
 import pytest
 
 from duckielib.solution import export_solution, reference_solution_dir
+from duckielib.tools.real_ros import free_port, stop_ros_tool
 
 #: Where Debian installs rospy, genpy, rosbag and the message packages.
 DEBIAN_DIST_PACKAGES = "/usr/lib/python3/dist-packages"
@@ -57,29 +56,12 @@ def ros_import():
         sys.path.remove(DEBIAN_DIST_PACKAGES)
 
 
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
-
-
-def _stop(process: subprocess.Popen, timeout: float = 20) -> None:
-    """End a process group as Ctrl-C does, then harder if it does not listen."""
-    if process.poll() is None:
-        os.killpg(process.pid, signal.SIGINT)
-        try:
-            process.wait(timeout)
-        except subprocess.TimeoutExpired:
-            os.killpg(process.pid, signal.SIGKILL)
-            process.wait()
-
-
 class Master:
     """A roscore on loopback and the environment the course's nodes need to use it."""
 
     def __init__(self, folder: Path) -> None:
         self.folder = folder
-        self.uri = f"http://127.0.0.1:{_free_port()}"
+        self.uri = f"http://127.0.0.1:{free_port()}"
         # In a process of its own: this one keeps Debian's packages off its path.
         messages = folder / "msgs"
         subprocess.run(
@@ -184,7 +166,7 @@ class Master:
         )
 
     rate = RATE
-    stop = staticmethod(_stop)
+    stop = staticmethod(stop_ros_tool)
 
     @staticmethod
     def wait_for_bag(bag: Path, timeout: float = 20) -> Path:
