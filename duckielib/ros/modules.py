@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Union
 
 from duckielib import messages
-from duckielib.ros import dtros, rospy
+from duckielib.ros import apriltags, dtros, rospy
 
 __all__ = [
     "PackageDefinitions",
@@ -306,6 +306,7 @@ _SERVED: Dict[str, List[str]] = {top: list(modules) for top, modules in _aliases
 
 
 def _register_finder() -> None:
+    apriltags.register()
     if not any(isinstance(finder, RobotImports) for finder in sys.meta_path):
         sys.meta_path.append(RobotImports())
     if not any(isinstance(finder, PackageDefinitions) for finder in sys.meta_path):
