@@ -32,6 +32,7 @@ Laptop side; never deployed.
 from __future__ import annotations
 
 import itertools
+import math
 import socket
 import threading
 import time
@@ -66,6 +67,16 @@ _TIME_PERIOD_NS = 10_000_000
 
 #: Wall seconds a viewer's panels have to subscribe after its first subscription.
 _SETTLE_S = 1.0
+
+#: Messages the server holds for a viewer that falls behind, per unit of rate, and at most.
+#: The SDK drops a viewer's oldest message when its queue is full (1,024 by default); a run
+#: at 50 x the wall clock's pace sends about 10,000 messages a second, so a viewer's
+#: process paused for a tenth of a second would otherwise lose some.
+_BACKLOG_PER_RATE = 1024
+_BACKLOG_MAX = 16384
+
+#: Wall seconds a viewer has to receive the last messages before the server stops.
+_LAST_MESSAGES_S = 0.25
 
 _numbers = itertools.count(1)
 
@@ -144,6 +155,9 @@ class LiveView:
                 capabilities=[foxglove.Capability.Time],
                 server_listener=self._viewers,
                 context=self._context,
+                message_backlog_size=min(
+                    _BACKLOG_MAX, _BACKLOG_PER_RATE * max(1, math.ceil(self.rate))
+                ),
             )
         except RuntimeError as error:
             reason = str(error).split(": ", 1)[-1]
@@ -273,7 +287,10 @@ class LiveView:
             self._next_time_ns = t_ns + _TIME_PERIOD_NS
 
     def close(self) -> None:
-        """Stop serving; the graph runs at full speed again. Closing twice does nothing."""
+        """Stop serving; the graph runs at full speed again. Closing twice does nothing.
+
+        A viewer gets a quarter of a second to receive the last messages first.
+        """
         if self.closed:
             return
         self.closed = True
@@ -283,6 +300,8 @@ class LiveView:
         for tap in self._taps.values():
             tap.unregister()
         self._taps.clear()
+        if self._viewers.subscribed.is_set():
+            time.sleep(_LAST_MESSAGES_S)  # what is still queued for a viewer reaches it
         self._server.stop()
         _wait_until_free(self._host, self._server.port)
         for channel in self._channels.values():

@@ -279,6 +279,10 @@ def test_duckie_mission_live_waits_for_a_viewer_and_serves_the_whole_run(tmp_pat
     assert "A viewer is watching: driving at 50 x the wall clock's pace." in out
     bag = Bag(tmp_path / "run" / "mission.bag")
     received = viewer.decoded(truth)
+    recorded = [data for _, _, data in bag.raw_messages([truth])]
+    payloads = {payload for _, payload in viewer.received[truth]}
+    lost = [number for number, data in enumerate(recorded) if data not in payloads]
+    assert not lost, f"the viewer missed these of the {len(recorded)} poses: {lost}"
     assert len(received) == bag.topics[truth].count > 300
     assert received[0][0] <= 10**6  # from the start
     assert [payload for _, payload in viewer.received[truth]] == [
