@@ -14,6 +14,7 @@ from typing import Dict, Iterator, List
 
 import pytest
 
+from duckielib.ros.modules import _is_ours as is_ours
 from duckielib.solution import export_solution, reference_solution_dir
 from duckielib.tools.real_ros import free_port, stop_ros_tool
 
@@ -29,29 +30,47 @@ RATE = 2.0
 RECORDER = "test_recorder"
 
 
+def _from_debian(module: object) -> bool:
+    return (getattr(module, "__file__", None) or "").startswith(DEBIAN_DIST_PACKAGES)
+
+
 @pytest.fixture(scope="module")
 def ros_import():
     """Import a module of Debian's ROS 1 packages, or skip saying how to install them.
 
     The folder is appended at the end of ``sys.path`` so the project's own packages keep
-    priority, as the ROS backend does. Afterwards the path and every module loaded from it
-    are removed again, so other tests never meet the real rospy by accident.
+    priority, as the ROS backend does. While the module's tests run, the course's own modules
+    of the same names (``rospy``, ``std_msgs.msg``... which an earlier test in this process may
+    have installed) step aside, so the name finds Debian's; a test that gets anything else fails
+    saying so. Afterwards the path and every module loaded from it are removed again and the
+    course's modules come back, so other tests never meet the real rospy by accident.
     """
     added = DEBIAN_DIST_PACKAGES not in sys.path
     if added:
         sys.path.append(DEBIAN_DIST_PACKAGES)
+    aside = {  # the course's modules under ROS's names
+        name: module
+        for name, module in sys.modules.items()
+        if name.partition(".")[0] != "duckielib" and is_ours(module)
+    }
+    for name in aside:
+        del sys.modules[name]
     before = set(sys.modules)
 
     def load(name: str):
         try:
-            return importlib.import_module(name)
+            module = importlib.import_module(name)
         except ImportError as error:
             pytest.skip(f"Debian's ROS 1 packages are not installed ({error}); run `make ros`.")
+        if not _from_debian(module):
+            pytest.fail(f"{name} came from {getattr(module, '__file__', None)}, not Debian's ROS.")
+        return module
 
     yield load
     for name in set(sys.modules) - before:
-        if (getattr(sys.modules[name], "__file__", None) or "").startswith(DEBIAN_DIST_PACKAGES):
+        if _from_debian(sys.modules[name]):
             del sys.modules[name]
+    sys.modules.update(aside)
     if added:
         sys.path.remove(DEBIAN_DIST_PACKAGES)
 
