@@ -14,11 +14,10 @@ pytest-xdist 3.8.0 reports that test as failed and starts a new worker, but its 
 - may give work to a new worker that has not yet collected the tests, and stops on a
   ``KeyError``.
 
-:class:`CrashSafeScopes` is xdist's own scheduler with those three steps done as the run
-needs: only what was left of the dead worker's modules goes back, without the test that
-crashed, a worker always knows its next test or that there is none, and a worker gets work
-once it has collected. ``tests/conftest.py``
-makes it the scheduler of ``--dist loadscope``.
+:class:`CrashSafeScopes` is xdist's own scheduler with those steps done as the run needs:
+only what was left of the dead worker's modules goes back, without the test that crashed, a
+worker always knows its next test or that there is none, and a worker gets work once it has
+collected. ``tests/conftest.py`` makes it the scheduler of ``--dist loadscope``.
 """
 
 from __future__ import annotations

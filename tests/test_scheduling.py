@@ -11,6 +11,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+from pace import seconds
+
 MODULES = {
     "test_first.py": "def test_1(): pass\ndef test_2(): pass\ndef test_3(): pass\n",
     "test_crash.py": (
@@ -37,7 +39,7 @@ def test_a_crashed_worker_costs_its_test_only_and_the_run_ends(tmp_path):
         env={"PYTHONPATH": str(Path(__file__).parent), "PATH": "/usr/bin:/bin"},
         capture_output=True,
         text=True,
-        timeout=180,
+        timeout=seconds(180),
         check=False,
     )  # fmt: skip
     said = done.stdout

@@ -8,7 +8,8 @@ would crash the notebook's kernel or ``duckie run`` seconds or minutes after the
 away. The fix (free the detector first, as the C library's own example does) is merged in
 Duckietown's repository, in its pull request 26, but not released.
 
-Importing :mod:`duckielib.ros` places :class:`AprilTagsFix` on ``sys.meta_path``: when
+Importing :mod:`duckielib.ros` places :class:`AprilTagsFix` on ``sys.meta_path``, just
+before Python's own path finder (finders placed earlier keep their turn): when
 ``dt_apriltags`` is imported (by a node, a notebook, a test), its ``Detector`` gets a clean-up
 that frees in the right order. The library itself is not changed on disk.
 """
@@ -21,7 +22,7 @@ import sys
 import types
 from typing import Any, Optional, Sequence
 
-__all__ = ["AprilTagsFix", "fix_detector", "register"]
+__all__ = ["AprilTagsFix", "fix_detector", "fix_loaded"]
 
 #: The module that defines ``Detector``.
 MODULE = "dt_apriltags.apriltags"
@@ -91,19 +92,8 @@ class AprilTagsFix(importlib.abc.MetaPathFinder):
         return None
 
 
-def register() -> None:
-    """Put :class:`AprilTagsFix` on ``sys.meta_path``; fix a ``Detector`` loaded already.
-
-    It goes just before Python's own path finder, which finds ``dt_apriltags`` on the disk;
-    finders placed earlier (an editor's, a test's) keep their turn.
-    """
-    finders = sys.meta_path
-    if not any(isinstance(finder, AprilTagsFix) for finder in finders):
-        where = next(
-            (i for i, f in enumerate(finders) if f is importlib.machinery.PathFinder),
-            len(finders),
-        )
-        finders.insert(where, AprilTagsFix())
+def fix_loaded() -> None:
+    """Fix ``Detector`` if ``dt_apriltags`` was imported before :class:`AprilTagsFix` was placed."""
     loaded = sys.modules.get(MODULE)
     if loaded is not None:
         fix_detector(loaded)

@@ -305,18 +305,25 @@ def _real_rospy_in_use() -> bool:
 _SERVED: Dict[str, List[str]] = {top: list(modules) for top, modules in _aliases().items()}
 
 
-def _register_finder() -> None:
-    apriltags.register()
-    if not any(isinstance(finder, RobotImports) for finder in sys.meta_path):
-        sys.meta_path.append(RobotImports())
-    if not any(isinstance(finder, PackageDefinitions) for finder in sys.meta_path):
-        # Just before Python's path finder, which would make the folder a namespace package.
-        finders = sys.meta_path
+def _before_path_finder(kind: type) -> None:
+    """Place a ``kind`` finder just before Python's path finder, unless one is placed."""
+    finders = sys.meta_path
+    if not any(isinstance(finder, kind) for finder in finders):
         where = next(
             (i for i, f in enumerate(finders) if f is importlib.machinery.PathFinder),
             len(finders),
         )
-        finders.insert(where, PackageDefinitions())
+        finders.insert(where, kind())
+
+
+def _register_finder() -> None:
+    if not any(isinstance(finder, RobotImports) for finder in sys.meta_path):
+        sys.meta_path.append(RobotImports())
+    # Before Python's path finder: it would make a package folder a namespace package, and it
+    # finds dt_apriltags, whose Detector the fix replaces the clean-up of.
+    _before_path_finder(apriltags.AprilTagsFix)
+    _before_path_finder(PackageDefinitions)
+    apriltags.fix_loaded()
 
 
 _register_finder()
