@@ -36,7 +36,7 @@ import builtins
 import json
 import re
 import sys
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Sequence
 
 #: The environment variables the student's code may read that a test sets (``robot_topic``
 #: reads the robot's name): each call carries their values in the grader's process, and the
@@ -329,6 +329,20 @@ class CallsBroken(Exception):
     """The kernel could not answer (it died, ran out of time, or answered nonsense)."""
 
 
+class AnswerRefused(CallsBroken):
+    """The student's code answered a call with more data than the grader reads."""
+
+
+def _too_long(size: int) -> str:
+    from autograder.sandbox.inside.wire import ANSWER_LIMIT
+
+    return (
+        f"your code answered one call of this test with {size / 1e6:.1f} MB of data; the grader "
+        f"reads at most {ANSWER_LIMIT / 1e6:.1f} MB of one answer, far more than any answer of "
+        "the course needs, so this test fails"
+    )
+
+
 class Abandon(BaseException):
     """The notebook's run is over (its time, or its sandbox, ended): the test stops at once."""
 
@@ -454,6 +468,8 @@ class Link:
         self.send = send
         self.paths = paths
         self.calls = 0
+        #: The longest answer the kernel gave, in characters.
+        self.largest = 0
 
     def encode(self, value: Any) -> Any:
         """``value`` as data for the kernel (paths moved into the sandbox's view)."""
@@ -490,12 +506,15 @@ class Link:
         """Send ``request`` to the kernel; the value it answered, or the error it raised."""
         self.calls += 1
         text = self.send(request)
+        self.largest = max(self.largest, len(text))
         try:
             reply = json.loads(text)
         except (ValueError, RecursionError):
             reply = None
         if type(reply) is dict and len(reply) == 1 and "broken" in reply:
             raise CallsBroken(str(reply["broken"])[:MAX_TEXT])
+        if type(reply) is dict and len(reply) == 1 and type(reply.get("refused")) is int:
+            raise AnswerRefused(_too_long(reply["refused"]))
         if type(reply) is dict and len(reply) == 1 and "raised" in reply:
             raise _student_error(reply["raised"])
         if type(reply) is not dict or len(reply) != 1 or "value" not in reply:
@@ -591,11 +610,31 @@ def free_names(source: str) -> List[str]:
     return found
 
 
+def answer_names(cells: List[Any]) -> List[str]:
+    """The names the course's answer cells define: the only names a test asks of the kernel.
+
+    Args:
+        cells: the cells of the course's own notebook (its source), never a submission's.
+    """
+    found: List[str] = []
+    for cell in cells:
+        meta = cell.get("metadata", {}).get("nbgrader", {})
+        if cell.get("cell_type") != "code" or not meta.get("solution"):
+            continue
+        lines = str(cell.get("source", "")).splitlines()
+        text = "\n".join("" if line.lstrip().startswith(("%", "!")) else line for line in lines)
+        found += [name for name in _defined_names(text) if name not in found]
+    return found
+
+
 def prelude(cells: List[Any]) -> Dict[str, Any]:
     """The grader's namespace for a notebook's tests: the imports of its instructor's cells.
 
     Only ``import`` statements of the cells that are neither answers nor tests are run, here in
-    the grader (a name an import cannot give here is asked of the kernel instead).
+    the grader. ``cells`` must be the course's own notebook (its source or its release), never
+    a submission: a cell a student added would run its imports in the grader, and an import
+    may run any code (a module beside the notebook) or rebind a name the tests read
+    (``from unittest.mock import call as math``).
     """
     import ast
     import contextlib
@@ -623,7 +662,13 @@ def prelude(cells: List[Any]) -> Dict[str, Any]:
     return space
 
 
-def run_test(source: str, grade_id: str, space: Dict[str, Any], link: Link) -> List[Dict[str, Any]]:
+def run_test(
+    source: str,
+    grade_id: str,
+    space: Dict[str, Any],
+    link: Link,
+    answers: Optional[Sequence[str]] = None,
+) -> List[Dict[str, Any]]:
     """Run one test cell here, the student's names asked of the kernel; the cell's outputs.
 
     Args:
@@ -632,6 +677,9 @@ def run_test(source: str, grade_id: str, space: Dict[str, Any], link: Link) -> L
         space: the notebook's namespace for its tests (:func:`prelude`); what the test defines
             at its top level stays there for the next tests, as in a kernel.
         link: the way to the kernel.
+        answers: the names the test may ask of the kernel (:func:`answer_names`); any other
+            name the test reads is the grader's or undefined. None: any name (the student's
+            own notebook, where every name is the student's anyway).
 
     Returns:
         The cell's outputs as notebook data: what the test printed and, if it failed, an error
@@ -645,7 +693,11 @@ def run_test(source: str, grade_id: str, space: Dict[str, Any], link: Link) -> L
     printed = io.StringIO()
     cell = dict(space)
     try:
-        names = [name for name in free_names(source) if name not in space]
+        names = [
+            name
+            for name in free_names(source)
+            if name not in space and (answers is None or name in answers)
+        ]
         for name in names:
             # Without it, the test raises NameError where it uses the name, as in a kernel.
             with contextlib.suppress(NameError):
@@ -672,7 +724,9 @@ def run_test(source: str, grade_id: str, space: Dict[str, Any], link: Link) -> L
 
 
 def _error_output(error: BaseException) -> Dict[str, Any]:
-    if isinstance(error, CallsBroken):
+    if isinstance(error, AnswerRefused):
+        name, value = "AnswerTooLong", str(error)
+    elif isinstance(error, CallsBroken):
         name, value = "CellTimeoutError" if "time" in str(error) else "KernelError", str(error)
     else:
         name, value = type(error).__name__, str(error)

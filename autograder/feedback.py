@@ -239,8 +239,14 @@ def write_feedback(
         '<html lang="en"><head><meta charset="utf-8">',
         f"<title>{_e(heading)}</title><style>{_STYLE}</style></head><body>",
         f"<h1>{_e(heading)}</h1>",
-        f"<p>Tests: <strong>{result.total:g} / {result.max_total:g}</strong> points.",
     ]
+    if not result.complete:
+        # The grader's side stopped: no grade is given, and the next run grades again.
+        items = "".join(f"<li>{_e(problem)}</li>" for problem in result.problems)
+        parts.append(f'<div class="note"><p>Not graded yet:</p><ul>{items}</ul></div>')
+        parts.append("</body></html>\n")
+        return _written(path, parts)
+    parts.append(f"<p>Tests: <strong>{result.total:g} / {result.max_total:g}</strong> points.")
     if result.missions:
         parts.append(f" Driving: <strong>{result.driving_score:g} / {MAX_SCORE:g}</strong>.")
     parts.append(
@@ -254,6 +260,10 @@ def write_feedback(
     parts += _tests_section(result, names, answers or set())
     parts += _driving_sections(result)
     parts.append("</body></html>\n")
+    return _written(path, parts)
+
+
+def _written(path: Path, parts: List[str]) -> Path:
     partial = path.with_name(path.name + ".partial")
     partial.write_text("\n".join(parts), encoding="utf-8")
     partial.replace(path)

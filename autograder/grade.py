@@ -60,9 +60,10 @@ from autograder.driving import MAX_SCORE, MISSIONS
 from autograder.feedback import write_feedback
 from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
 from autograder.formgrade import for_formgrader, rubrics
-from autograder.results import StudentResult, from_data, to_data, write_atomic
+from autograder.results import StudentResult, from_data, not_graded, to_data, write_atomic
 from autograder.sandbox import Limits
-from autograder.unit import raised_outside_tests, run_unit
+from autograder.sandbox.unit_process import run_unit
+from autograder.unit import raised_outside_tests
 from duckielib.solution.cascade import Dependencies
 
 __all__ = [
@@ -338,7 +339,8 @@ class _Writer:
             result.cells.setdefault(cell, (0.0, most))
         result.cells = {cell: result.cells[cell] for cell in sorted(result.cells)}
         self._explain(result)
-        self._save_grades(result, sorted(autograded))
+        if result.complete:  # a grading that stopped is no grade: the gradebook keeps its own
+            self._save_grades(result, sorted(autograded))
         for name, text in autograded.items():
             path = self.out / "work" / "autograded" / result.student / name / f"{name}.ipynb"
             write_atomic(path, for_formgrader(text, name, self.rubrics))
@@ -448,17 +450,20 @@ class _Writer:
             + [f"{assignment}:{grade_id}" for assignment, grade_id in columns]
         )
         for result in results:
-            score = result.driving_score
+            # A student whose grading stopped has no grade: empty cells, not zeros.
+            score = result.driving_score if result.complete else None
             writer.writerow(
                 [
                     _text_cell(result.shown),
-                    f"{result.total:g}",
+                    f"{result.total:g}" if result.complete else "",
                     f"{result.max_total:g}",
                     str(len(result.to_grade)),
                     "" if score is None else f"{score:g}",
                 ]
                 + [
-                    f"{result.missions[name].score:g}" if name in result.missions else ""
+                    f"{result.missions[name].score:g}"
+                    if name in result.missions and result.complete
+                    else ""
                     for name in driven
                 ]
                 + [
@@ -473,7 +478,7 @@ class _Writer:
                 ]
                 + [
                     f"{result.cells[key][0]:g}"
-                    if key in result.cells and key not in result.to_grade
+                    if key in result.cells and key not in result.to_grade and result.complete
                     else ""
                     for key in columns
                 ]
@@ -780,7 +785,7 @@ def _stopped(student: str, why: str) -> StudentResult:
     """A student whose grading stopped for ``why``, to be graded again by the next run."""
     return StudentResult(
         student,
-        problems=[f"Grading stopped: {why}; run duckie grade again to retry."],
+        problems=[not_graded(why)],
         complete=False,
     )
 

@@ -161,6 +161,8 @@ def _assignment_scores(
     possible: Dict[str, float] = dict.fromkeys(assignments, 0.0)
     for result in results:
         mine = scores.setdefault(result.shown, {})
+        if not result.complete:  # not graded (the grader's side stopped): empty, as without
+            continue
         most: Dict[str, float] = {}
         for (assignment, _), (score, top) in result.cells.items():
             mine[assignment] = mine.get(assignment, 0.0) + score

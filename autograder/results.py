@@ -19,7 +19,12 @@ from typing import Any, Dict, List, Optional, Tuple, Union
 
 from autograder.driving import Driving, driving_score
 
-__all__ = ["StudentResult", "from_data", "to_data", "write_atomic"]
+__all__ = ["StudentResult", "from_data", "not_graded", "to_data", "write_atomic"]
+
+
+def not_graded(why: str) -> str:
+    """The sentence of a student whose grading stopped on the grader's side (no grade given)."""
+    return f"Not graded: {why}; run duckie grade again to grade this student."
 
 
 @dataclass

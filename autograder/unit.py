@@ -3,9 +3,9 @@
 Whatever one student's files do to the grader (a notebook nbgrader cannot handle, a hang, a
 crash, all memory), it happens in this unit's process and stops there: the class's other
 students, and the results already written, are not touched. A unit runs on any worker of the
-class's Dask cluster (:mod:`autograder.grade`): :func:`run_unit` writes what it is given into a
-temporary folder, starts ``python -m autograder.unit FOLDER`` with a time limit, and answers
-with what that process wrote back, as plain data.
+class's Dask cluster (:mod:`autograder.grade`), which starts ``python -I -m autograder.unit
+FOLDER`` (:func:`autograder.sandbox.unit_process.run_unit`: unprivileged, on a file system of
+the student's own, where the grader runs as root); this module is that process.
 
 Inside, nbgrader works as it does for a class, on a gradebook of this unit's own (a copy of the
 class's, which holds the hidden tests): the student's notebooks are repaired against the release
@@ -13,7 +13,8 @@ class's, which holds the hidden tests): the student's notebooks are repaired aga
 (:mod:`autograder.sandbox`), and exported to drive the missions
 (:mod:`autograder.driving`). The grader reads back only what it asked for: the executed notebook
 a sandboxed run prints (bounded), and the mission's files through :mod:`autograder.files`. The
-notebooks it exports are its own repaired copies, in a folder no sandbox sees.
+notebooks it exports are its own repaired copies, in a folder no sandbox sees. No line of the
+submission runs here: the tests' namespace comes from the course alone (:mod:`autograder.calls`).
 """
 
 from __future__ import annotations
@@ -22,8 +23,6 @@ import dataclasses
 import json
 import os
 import shutil
-import signal
-import subprocess
 import sys
 import tempfile
 import time
@@ -31,118 +30,16 @@ import traceback
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
-__all__ = ["UNIT_MARGIN_S", "raised_outside_tests", "run_unit", "unit_seconds"]
+__all__ = ["GraderFailed", "main", "raised_outside_tests"]
 
-#: Seconds a unit may take besides its notebooks' and mission's limits (nbgrader's own work).
-UNIT_MARGIN_S = 300
 #: What of a student's files the notebook's folder gets: not notebooks (the repaired one is
 #: written there), not hidden files, not Python modules (a ``numpy.py`` next to the notebook
 #: would stand in for numpy in the tests).
 SKIPPED = ("*.ipynb", ".*", "*.py", "*.pyc", "*.pth", "*.so")
 
 
-def unit_seconds(task: Dict[str, Any]) -> float:
-    """The wall time a student's unit may take: each notebook's limit, the missions', a margin."""
-    from autograder.driving import MISSIONS
-
-    limits = task["limits"]
-    driving = len(MISSIONS) * limits["mission_seconds"] if task.get("driving") else 0
-    return len(task["names"]) * limits["submission_seconds"] + driving + UNIT_MARGIN_S
-
-
-def _pdeathsig() -> None:  # pragma: no cover - runs in the child before exec
-    """Die with the worker that started this unit (Linux), so none outlives a killed worker."""
-    import ctypes
-
-    libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
-
-
-def run_unit(
-    task: Dict[str, Any], files: Dict[str, bytes], course: Path, scratch: Optional[str] = None
-) -> Dict[str, Any]:
-    """Grade one student in a process of its own; what it found, as plain data.
-
-    Args:
-        task: the student, the assignments, the limits (see :mod:`autograder.grade`).
-        files: the student's files, ``"NAME/relative/path" -> bytes``, already read safely.
-        course: a folder with the class's ``source/``, ``release/`` and ``gradebook.db``.
-        scratch: the folder the unit's own temporary folder goes in (the system's by default).
-
-    Returns:
-        ``{"result": ..., "autograded": {NAME: notebook text}}``, the result as
-        :func:`autograder.results.to_data` writes it; when the unit itself stopped (its time
-        limit, a crash), a result with ``complete`` false and a sentence saying why.
-    """
-    from autograder.sandbox import end_student_groups, unit_user
-
-    seconds = unit_seconds(task)
-    # The student's user id, chosen here: whatever ends the unit, its control groups go with it.
-    uid = unit_user()
-    with tempfile.TemporaryDirectory(prefix="duckie-unit-", dir=scratch) as folder:
-        try:
-            return _run_unit(task, files, course, Path(folder), seconds, uid)
-        finally:
-            end_student_groups(uid)
-
-
-def _run_unit(
-    task: Dict[str, Any],
-    files: Dict[str, bytes],
-    course: Path,
-    base: Path,
-    seconds: float,
-    uid: int,
-) -> Dict[str, Any]:
-    """:func:`run_unit` in folder ``base``, the student running as user ``uid``."""
-    from autograder.files import write_files
-
-    write_files(base / "submission", files)
-    (base / "task.json").write_text(
-        json.dumps({**task, "course_dir": str(course), "uid": uid}), encoding="utf-8"
-    )
-    command = [sys.executable, "-m", "autograder.unit", str(base)]
-    stopped = None
-    try:
-        finished = subprocess.run(
-            command,
-            capture_output=True,
-            text=True,
-            timeout=seconds,
-            check=False,
-            preexec_fn=_pdeathsig,
-        )
-        if finished.returncode != 0 or not (base / "result.json").is_file():
-            lines = [line for line in finished.stderr.splitlines() if line.strip()]
-            stopped = (
-                f"the grader's process for this student stopped ({lines[-1][:300]})"
-                if lines
-                else f"the grader's process for this student ended with {finished.returncode}"
-            )
-    except subprocess.TimeoutExpired:
-        stopped = f"the grading of this student took more than {seconds:.0f} s and was stopped"
-    if stopped is not None:
-        return {
-            "result": {
-                "student": task["student"],
-                "cells": {},
-                "problems": [f"Grading stopped: {stopped}; run duckie grade again to retry."],
-                "messages": {},
-                "missions": {},
-                "complete": False,
-            },
-            "autograded": {},
-        }
-    answer = json.loads((base / "result.json").read_text(encoding="utf-8"))
-    autograded = {}
-    for name in task["names"]:
-        path = base / "autograded" / f"{name}.ipynb"
-        if path.is_file():
-            autograded[name] = path.read_text(encoding="utf-8")
-    return {"result": answer, "autograded": autograded}
-
-
-# What follows runs in the unit's own process.
+class GraderFailed(Exception):
+    """The grader's side failed on this student (nbgrader, its disk, its database): no grade."""
 
 
 def _sandboxed_execute_class(unit: _Unit):
@@ -157,7 +54,7 @@ def _sandboxed_execute_class(unit: _Unit):
             name = resources["nbgrader"]["assignment"]
             began = time.monotonic()
             sent, tests = _remote_tests(nb)
-            run = _TestsHere(unit, nb.cells, tests)
+            run = _TestsHere(unit, nb.cells, tests, _course_cells(unit, name))
             text, problem = unit.server.run(name, nbformat.writes(sent), run.test)
             executed = None
             if text is not None:
@@ -235,25 +132,41 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     return sent, tests
 
 
-class _TestsHere:
-    """Runs a notebook's tests in the unit's process, as the sandbox reaches each of them."""
+def _course_cells(unit: Any, name: str) -> List[Any]:
+    """The cells of the course's own notebook ``name`` (its source, with the answers)."""
+    import nbformat
 
-    def __init__(self, unit: Any, cells: List[Any], tests: Dict[int, str]) -> None:
+    path = unit.course_dir / "source" / name / f"{name}.ipynb"
+    return list(nbformat.read(path, as_version=4).cells)
+
+
+class _TestsHere:
+    """Runs a notebook's tests in the unit's process, as the sandbox reaches each of them.
+
+    The tests' namespace and the names they may ask of the kernel come from the course's own
+    notebook (``course``), never from the submission: a cell a student added runs in the
+    sandbox only.
+    """
+
+    def __init__(
+        self, unit: Any, cells: List[Any], tests: Dict[int, str], course: List[Any]
+    ) -> None:
         self.unit = unit
-        self.cells = cells
+        self.course = course
         self.sources = {grade_id: cells[index].source for index, grade_id in tests.items()}
         self.space: Optional[Dict[str, Any]] = None
         self.outputs: Dict[str, List[Dict[str, Any]]] = {}
 
     def test(self, grade_id: str, ask: Any) -> None:
         """Run test ``grade_id`` (one the grader sent empty), asking the kernel through ``ask``."""
-        from autograder.calls import Link, prelude, run_test
+        from autograder.calls import Link, answer_names, prelude, run_test
         from autograder.robots import robot_names
 
         if grade_id not in self.sources:
             return
         if self.space is None:
-            self.space = prelude(self.cells)
+            self.space = prelude(self.course)
+            self.answers = answer_names(self.course)
         seconds = self.unit.limits.cell_seconds
         until = time.monotonic() + seconds
         # A test that runs the student's nodes: the robot here, the nodes in the sandbox.
@@ -269,10 +182,14 @@ class _TestsHere:
         saved = tempfile.tempdir
         tempfile.tempdir = str(self.unit.shared)
         try:
-            self.outputs[grade_id] = run_test(self.sources[grade_id], grade_id, self.space, link)
+            self.outputs[grade_id] = run_test(
+                self.sources[grade_id], grade_id, self.space, link, self.answers
+            )
         finally:
             tempfile.tempdir = saved
         self.unit.timings["calls"] = self.unit.timings.get("calls", 0) + link.calls
+        largest = max(self.unit.timings.get("largest_answer", 0), link.largest)
+        self.unit.timings["largest_answer"] = largest
 
 
 def raised_outside_tests(
@@ -437,12 +354,12 @@ class _Unit:
             before = time.monotonic() - self.timings["notebooks"]
             outcome = api.autograde(name, self.student, force=True, create=True)
             self.timings["nbgrader"] += time.monotonic() - self.timings["notebooks"] - before
-            if not outcome["success"]:
-                self.problems.append(f"{name}: nbgrader could not grade it ({_why(outcome)})")
+            if not outcome["success"]:  # the grader's failure, not the student's: no grade
+                raise GraderFailed(f"nbgrader could not grade {name} ({_why(outcome)})")
             graded = self.root / "autograded" / self.student / name / f"{name}.ipynb"
             if graded.is_file():
-                (self.folder / "autograded").mkdir(exist_ok=True)
-                shutil.copy(graded, self.folder / "autograded" / f"{name}.ipynb")
+                (self.folder / "out" / "autograded").mkdir(exist_ok=True)
+                shutil.copy(graded, self.folder / "out" / "autograded" / f"{name}.ipynb")
             for grade_id, message in failure_messages(graded).items():
                 messages[(name, grade_id)] = message
         self.server.stop()
@@ -562,7 +479,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 1
     from autograder.results import write_atomic
 
-    write_atomic(folder / "result.json", json.dumps(data))
+    write_atomic(folder / "out" / "result.json", json.dumps(data))
     return 0
 
 

@@ -23,10 +23,16 @@ import os
 import shutil
 import subprocess
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Dict, Iterator, List, Optional, Sequence, Tuple
 
+from autograder.sandbox.groups import (
+    end_student_groups,
+    joined,
+    remove_when_empty,
+    student_groups,
+)
+from autograder.sandbox.limits import NOBODY, Limits
 from duckielib.errors import DuckielibError
 
 __all__ = [
@@ -40,8 +46,6 @@ __all__ = [
     "sandboxed_command",
 ]
 
-#: The unprivileged user and group the code runs as.
-NOBODY = 65534
 #: The first of the user ids given to students' gradings (:func:`unit_user`).
 FIRST_UNIT_USER = 1_000_000
 #: Where the submission's own folder appears inside the sandbox.
@@ -56,182 +60,6 @@ class SandboxError(DuckielibError):
 
 class SandboxUnavailable(SandboxError):
     """bubblewrap is missing or cannot create a sandbox on this machine."""
-
-
-@dataclass(frozen=True)
-class Limits:
-    """What one submission may use.
-
-    Attributes:
-        cell_seconds: wall time of one notebook cell.
-        submission_seconds: wall time of one notebook, all cells and the kernel's start.
-        memory_bytes: address space of each process (a 20 GB allocation fails at once).
-        processes: processes and threads of the sandbox user (a fork bomb stops there).
-        cpu_seconds: CPU time of each process.
-        mission_seconds: wall time of the driving run (the mission on the virtual Duckiebot).
-        stall_seconds: wall time a node of the driving run may compute without calling rospy
-            (simulated time stands still meanwhile) before the run stops it, saying why.
-        file_bytes: the largest file a process may write (its standard output too).
-        output_bytes: the most the grader reads of a run's standard output and error.
-        uid: the unprivileged user (and group) the code runs as. The process limit counts
-            every process of that user, so each student's grading uses a user of its own
-            (:func:`unit_user`): a fork bomb cannot starve another student's sandbox.
-        cpus: how many CPUs all of one student's sandboxed processes may use together, where
-            the machine lets the grader make control groups (:func:`student_groups`): busy
-            loops a student leaves running slow only that student's grading.
-        total_memory_bytes: the memory all of one student's sandboxed processes may use
-            together (a control group, as ``cpus``).
-    """
-
-    cell_seconds: int = 60
-    submission_seconds: int = 600
-    memory_bytes: int = 4 * 1024**3
-    processes: int = 256
-    cpu_seconds: int = 900
-    mission_seconds: int = 180
-    stall_seconds: int = 10
-    file_bytes: int = 1024**3
-    output_bytes: int = 256 * 1024**2
-    uid: int = NOBODY
-    cpus: float = 1.0
-    total_memory_bytes: int = 6 * 1024**3
-
-
-#: Where the control groups of one student's sandboxes are made: cgroup v1's controllers (one
-#: folder each), or cgroup v2's single tree.
-CGROUP_V1 = Path("/sys/fs/cgroup")
-CGROUP_V2 = (Path("/sys/fs/cgroup/unified"), Path("/sys/fs/cgroup"))
-_PERIOD = 100_000
-
-
-def _quota(limits: Limits) -> int:
-    """The CPU time the student's processes may use per :data:`_PERIOD`, in microseconds."""
-    return max(1000, int(limits.cpus * _PERIOD))
-
-
-def _v1_settings(limits: Limits) -> Dict[str, Dict[str, str]]:
-    return {
-        "cpu": {"cpu.cfs_period_us": str(_PERIOD), "cpu.cfs_quota_us": str(_quota(limits))},
-        "memory": {"memory.limit_in_bytes": str(limits.total_memory_bytes)},
-        "pids": {"pids.max": str(limits.processes)},
-    }
-
-
-def student_groups(limits: Limits) -> List[Path]:
-    """The control groups of user ``limits.uid``'s sandboxes, made on first use.
-
-    All of one student's sandboxed processes together may use at most ``limits.cpus`` CPUs,
-    ``limits.total_memory_bytes`` of memory and ``limits.processes`` processes. Where the
-    machine lets the grader make no control group (no controller, no right to write it), the
-    list is empty and the per-process limits (``prlimit``) and the per-user process limit
-    still hold.
-    """
-    name = f"duckie-{limits.uid}"
-    made: List[Path] = []
-    for controller, settings in _v1_settings(limits).items():
-        root = _own_group(controller)
-        if root is not None and _make(root / name, settings):
-            made.append(root / name)
-    if made:
-        return made
-    for root in CGROUP_V2:
-        enabled = _text(root / "cgroup.subtree_control").split()
-        if not {"cpu", "memory", "pids"} <= set(enabled):
-            continue
-        settings = {
-            "cpu.max": f"{_quota(limits)} {_PERIOD}",
-            "memory.max": str(limits.total_memory_bytes),
-            "pids.max": str(limits.processes),
-        }
-        if _make(root / name, settings):
-            return [root / name]
-    return []
-
-
-def _own_group(controller: str) -> Optional[Path]:
-    """The folder of this process's own cgroup v1 group of ``controller``, if it has one.
-
-    A student's group is made inside it, so whatever limits the grader's own group has (a
-    container's memory) hold for the students' too.
-    """
-    for line in _text(Path("/proc/self/cgroup")).splitlines():
-        _, controllers, path = line.split(":", 2)
-        if controller in controllers.split(","):
-            folder = CGROUP_V1 / controller / path.lstrip("/")
-            return folder if (folder / "cgroup.procs").is_file() else None
-    return None
-
-
-def _make(group: Path, settings: Dict[str, str]) -> bool:
-    try:
-        group.mkdir(exist_ok=True)
-        for file, value in settings.items():
-            (group / file).write_text(value)
-    except OSError:
-        with contextlib.suppress(OSError):
-            group.rmdir()
-        return False
-    return True
-
-
-def _text(path: Path) -> str:
-    try:
-        return path.read_text()
-    except OSError:
-        return ""
-
-
-def joined(groups: Sequence[Path], command: Sequence[str]) -> List[str]:
-    """``command``, started from within ``groups`` (so are all the processes it starts)."""
-    if not groups:
-        return list(command)
-    # The shell moves itself into each group, then becomes the command.
-    script = 'for group in "$@"; do [ "$group" = -- ] && break; echo $$ > "$group"; shift; done'
-    script += '; shift; exec "$@"'
-    procs = [str(group / "cgroup.procs") for group in groups]
-    return ["/bin/sh", "-c", script, "sh", *procs, "--", *command]
-
-
-def _remove(group: Path, tries: int, kill: bool = False) -> None:
-    """Remove ``group`` once no process is left in it, trying ``tries`` times 10 ms apart.
-
-    With ``kill``, every process still in it is killed first at each try.
-    """
-    import signal
-    import time
-
-    for _ in range(tries):
-        if kill:
-            for pid in _text(group / "cgroup.procs").split():
-                with contextlib.suppress(OSError, ValueError):
-                    os.kill(int(pid), signal.SIGKILL)
-        try:
-            group.rmdir()
-            return
-        except FileNotFoundError:
-            return
-        except OSError:
-            time.sleep(0.01)
-
-
-def _remove_when_empty(groups: Sequence[Path]) -> None:
-    """Remove the groups once the processes just killed in them are gone (0.1 s at most).
-
-    A group another sandbox of the same student still uses stays (its unit removes it).
-    """
-    for group in groups:
-        _remove(group, tries=10)
-
-
-def end_student_groups(uid: int) -> None:
-    """Kill what is left in user ``uid``'s control groups, and remove them."""
-    name = f"duckie-{uid}"
-    owners = [_own_group(controller) for controller in ("cpu", "memory", "pids")]
-    candidates = [owner / name for owner in owners if owner is not None]
-    candidates += [root / name for root in CGROUP_V2]
-    for group in candidates:
-        if group.is_dir():
-            _remove(group, tries=100, kill=True)
 
 
 def unit_user() -> int:
@@ -284,6 +112,7 @@ def sandboxed_command(
     env: Optional[Dict[str, str]] = None,
     course: Optional[Path] = None,
     shared: Optional[Tuple[Path, str]] = None,
+    tmp: Optional[Path] = None,
 ) -> List[str]:
     """The command line that runs ``command`` in a sandbox whose only writable folder is ``folder``.
 
@@ -300,6 +129,8 @@ def sandboxed_command(
             writable at ``/course``, the working folder (to run every notebook in turn).
         shared: a folder of the grader's and where the sandbox sees it, read-only: files the
             grader's tests hand to the student's code (:mod:`autograder.calls`).
+        tmp: the folder the sandbox sees as ``/tmp`` (see :func:`scratch`); None: a new file
+            system of ``limits.disk_bytes``.
     """
     bwrap = shutil.which("bwrap")
     if bwrap is None:
@@ -308,7 +139,7 @@ def sandboxed_command(
             "apt-get install bubblewrap), or grade without a sandbox with --no-sandbox "
             "(student code then runs with your rights)."
         )
-    args = [bwrap, *_system_view()]
+    args = [bwrap, *_system_view(limits, tmp)]
     if course is None:
         inside = INSIDE
     elif Path(course) == Path(folder):  # all the student's folders, writable
@@ -323,8 +154,13 @@ def sandboxed_command(
     return args + _environment(env) + list(command)
 
 
-def _system_view() -> List[str]:
-    """Bubblewrap's options for what the sandbox sees of the system: read-only, its own /tmp."""
+def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
+    """Bubblewrap's options for what the sandbox sees of the system: read-only, its own /tmp.
+
+    ``/tmp`` is the folder ``tmp`` when given (the grader's own process for a student gives one
+    on that student's file system, :mod:`.unit_process`), a file system of ``limits.disk_bytes``
+    otherwise.
+    """
     args = [
         "--unshare-net",
         "--unshare-pid",
@@ -339,7 +175,10 @@ def _system_view() -> List[str]:
         "--symlink", "usr/sbin", "/sbin",
     ]  # fmt: skip
     # /tmp first: a Python environment that lives under /tmp is bound on top of it below.
-    args += ["--perms", "1777", "--tmpfs", "/tmp"]
+    if tmp is not None:
+        args += ["--bind", str(tmp), "/tmp"]
+    else:
+        args += ["--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", "/tmp"]
     made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
     for path in _readonly_paths():
         for parent in _parents(path):
@@ -360,21 +199,32 @@ def _system_view() -> List[str]:
 
 
 def _as_student(limits: Limits) -> List[str]:
-    """The command line's middle: become the unprivileged user, with ``limits``, no environment."""
+    """The command line's middle: become the unprivileged user, with ``limits``, no environment.
+
+    As root, the sandbox's processes become user ``limits.uid``. Without root (the grader's
+    own process for a student, :mod:`.unit_process`, already runs as that user), the sandbox
+    is a user namespace of that user's, in which no further one can be made.
+    """
+    if os.geteuid() == 0:
+        become = [
+            # Only to become the student's user just below; setpriv then drops every capability.
+            "--cap-add", "CAP_SETUID",
+            "--cap-add", "CAP_SETGID",
+            "setpriv",
+            f"--reuid={limits.uid}",
+            f"--regid={limits.uid}",
+            "--clear-groups",
+            "--no-new-privs",
+            "--inh-caps=-all",
+            "--bounding-set=-all",
+        ]  # fmt: skip
+    else:
+        become = ["--unshare-user", "--disable-userns", "--"]
     return [
-        # Only to become nobody just below; setpriv then drops every capability.
-        "--cap-add", "CAP_SETUID",
-        "--cap-add", "CAP_SETGID",
-        "setpriv",
-        f"--reuid={limits.uid}",
-        f"--regid={limits.uid}",
-        "--clear-groups",
-        "--no-new-privs",
-        "--inh-caps=-all",
-        "--bounding-set=-all",
+        *become,
         "prlimit",
         f"--as={limits.memory_bytes}",
-        f"--nproc={limits.processes}",
+        f"--nproc={sandbox_tasks(limits)}",
         f"--cpu={limits.cpu_seconds}",
         f"--fsize={limits.file_bytes}",
         "--core=0",
@@ -382,6 +232,41 @@ def _as_student(limits: Limits) -> List[str]:
         "env",
         "-i",
     ]  # fmt: skip
+
+
+#: The most processes and threads the grader's own process for a student may have besides the
+#: student's (a mission's robot runs a thread per subscription): they run as the same user.
+GRADER_TASKS = 256
+
+
+def sandbox_tasks(limits: Limits) -> int:
+    """The process limit (``RLIMIT_NPROC``) of a sandbox's processes.
+
+    It counts every process of the sandbox's user: as root that user is the student's alone;
+    without root, the grader's own process for the student (:mod:`.unit_process`) is that
+    user too, and may have :data:`GRADER_TASKS` of its own.
+    """
+    return limits.processes + (0 if os.geteuid() == 0 else GRADER_TASKS)
+
+
+@contextlib.contextmanager
+def scratch() -> Iterator[Optional[Path]]:
+    """A folder for a sandbox's ``/tmp`` where the grader runs unprivileged, removed afterwards.
+
+    The grader's own process for a student runs without root, on a file system of that
+    student's own (:mod:`.unit_process`): a sandbox's ``/tmp`` lies there too, so everything the
+    student writes counts against one size. As root, None: the sandbox makes its own.
+    """
+    import tempfile
+
+    if os.geteuid() == 0:
+        yield None
+        return
+    folder = Path(tempfile.mkdtemp(prefix="sandbox-tmp-"))
+    try:
+        yield folder
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
 
 
 def _environment(env: Optional[Dict[str, str]]) -> List[str]:
@@ -450,13 +335,15 @@ def started(
     import tempfile
 
     environment = None
-    if use_sandbox:
-        command = sandboxed_command(command, folder, limits, env=env, course=course, shared=shared)
-    elif env:
-        environment = {**os.environ, **env}
-    with tempfile.TemporaryFile() as given, tempfile.TemporaryFile() as out, (
+    with scratch() as tmp, tempfile.TemporaryFile() as given, tempfile.TemporaryFile() as out, (
         tempfile.TemporaryFile()
     ) as err:
+        if use_sandbox:
+            command = sandboxed_command(
+                command, folder, limits, env=env, course=course, shared=shared, tmp=tmp
+            )
+        elif env:
+            environment = {**os.environ, **env}
         given.write((stdin or "").encode("utf-8"))
         given.seek(0)
         groups = student_groups(limits) if use_sandbox else []
@@ -478,7 +365,7 @@ def started(
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(process.pid, signal.SIGKILL)
             process.wait()
-            _remove_when_empty(groups)
+            remove_when_empty(groups)
 
 
 def run(

@@ -46,18 +46,22 @@ class NotebookServer:
         self.use_sandbox = use_sandbox
         self.process: Optional[subprocess.Popen] = None
         self.errors: Any = None
+        self.scratch: Any = None
 
     def _start(self) -> subprocess.Popen:
         from autograder.sandbox import sandboxed_command
+        from autograder.sandbox.bubblewrap import scratch
 
         command = [sys.executable, str(RUNNER), "--serve", str(self.limits.cell_seconds)]
         if self.use_sandbox:
+            self.scratch = scratch()
             command = sandboxed_command(
                 [*command, "--sandboxed"],
                 self.folder,
                 self.limits,
                 course=self.folder,
                 shared=(self.shared, SHARED_INSIDE),
+                tmp=self.scratch.__enter__(),
             )
         from autograder.sandbox import joined, student_groups
 
@@ -177,7 +181,9 @@ class NotebookServer:
         if self.process.stdout is not None:
             self.process.stdout.close()
         self.errors.close()
-        self.process = self.errors = None
+        if self.scratch is not None:
+            self.scratch.__exit__(None, None, None)
+        self.process = self.errors = self.scratch = None
 
 
 class _TooMuch(Exception):

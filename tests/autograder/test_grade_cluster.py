@@ -197,7 +197,7 @@ def test_a_ctrl_c_while_a_student_is_recorded_waits_until_the_record_is_whole(tm
 
 def test_a_unit_that_cannot_grade_says_so_and_asks_to_be_run_again(tmp_path):
     from autograder.results import from_data
-    from autograder.unit import run_unit
+    from autograder.sandbox.unit_process import run_unit
 
     task = {
         "student": "ada",
@@ -211,6 +211,6 @@ def test_a_unit_that_cannot_grade_says_so_and_asks_to_be_run_again(tmp_path):
     result = from_data(answer["result"])
     assert not result.complete
     (problem,) = result.problems
-    assert problem.startswith("Grading stopped: the grader's process for this student stopped (")
-    assert problem.endswith("; run duckie grade again to retry.")
+    assert problem.startswith("Not graded: the grader's process for this student stopped (")
+    assert problem.endswith("; run duckie grade again to grade this student.")
     assert answer["autograded"] == {}

@@ -25,12 +25,26 @@ Runs inside the sandbox too: the standard library only.
 from __future__ import annotations
 
 import json
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, Union
 
-__all__ = ["HEADER", "Channel", "decode", "encode", "frame", "read_frame", "size"]
+__all__ = [
+    "ANSWER_LIMIT",
+    "HEADER",
+    "Channel",
+    "decode",
+    "encode",
+    "frame",
+    "read_frame",
+    "read_frame_within",
+    "size",
+]
 
 #: The bytes of a frame's length.
 HEADER = 8
+#: The longest answer of the student's code to one call of a test, in bytes of JSON. The
+#: course's own answers need at most about 1.3 MB (a camera image, in base64); the grader
+#: reads no more, so one answer cannot swell the grader's memory.
+ANSWER_LIMIT = 4 * 1024**2
 
 
 def frame(data: bytes) -> bytes:
@@ -51,6 +65,27 @@ def read_frame(stream: Any) -> Optional[bytes]:
     wanted = size(head)
     data = stream.read(wanted)
     return data if len(data) == wanted else None
+
+
+def read_frame_within(stream: Any, limit: int) -> Union[bytes, int, None]:
+    """The next frame's data, or its length when it is over ``limit``; None at its end.
+
+    A frame over the limit is read and dropped a chunk at a time, never held whole.
+    """
+    head = stream.read(HEADER)
+    if len(head) < HEADER:
+        return None
+    wanted = size(head)
+    if wanted <= limit:
+        data = stream.read(wanted)
+        return data if len(data) == wanted else None
+    left = wanted
+    while left > 0:
+        chunk = stream.read(min(left, 1 << 20))
+        if not chunk:
+            return None
+        left -= len(chunk)
+    return wanted
 
 
 def encode(message: Dict[str, Any]) -> bytes:

@@ -7,6 +7,7 @@ Every frame is a length-prefixed JSON header followed by the messages' bytes (se
 from __future__ import annotations
 
 import json
+import re
 import socket
 import struct
 import time
@@ -19,6 +20,7 @@ from duckielib.ros.log import LEVEL_NAMES, LogRecord
 from duckielib.ros.rospy.topics import AnyMsg, Subscriber
 
 __all__ = [
+    "HEADER_DEPTH",
     "HEADER_LIMIT",
     "LOG_LIMIT",
     "LinkError",
@@ -29,6 +31,7 @@ __all__ = [
     "TAKEN_LIMIT",
     "TOPIC_LIMIT",
     "VERSION",
+    "nests_deeper",
     "receive",
     "send",
 ]
@@ -160,12 +163,38 @@ def receive(sock: socket.socket, timeout: Optional[float]) -> Tuple[Dict[str, An
     body = bytes(buffer[_SIZES.size + head_size : end])
     del buffer[:end]
     try:
-        header = json.loads(head.decode("utf-8"))
-    except (UnicodeDecodeError, ValueError):
+        text = head.decode("utf-8")
+        if nests_deeper(text, HEADER_DEPTH):
+            raise LinkError(f"a frame's header nests more than {HEADER_DEPTH} levels deep")
+        header = json.loads(text)
+    except (UnicodeDecodeError, ValueError, RecursionError):
         raise LinkError("a frame's header is not JSON") from None
     if not isinstance(header, dict) or not isinstance(header.get("k"), str):
         raise LinkError("a frame's header is not an object with a kind")
     return header, body
+
+
+#: How deep a frame's header may nest lists and objects (the robot's and the nodes' nest 4).
+HEADER_DEPTH = 32
+_STRINGS = re.compile(r'"(?:[^"\\]|\\.)*"')
+_BRACKETS_ONLY = {ord(c): None for c in map(chr, range(128)) if c not in "[]{}"}
+
+
+def nests_deeper(text: str, limit: int) -> bool:
+    """Whether the JSON ``text`` nests lists and objects more than ``limit`` levels deep.
+
+    Read without recursion, before a JSON decoder (which recurses) sees the text: a frame of a
+    million ``[`` is refused here rather than stopping the reader with a RecursionError.
+    """
+    depth = 0
+    for char in _STRINGS.sub("", text).translate(_BRACKETS_ONLY):
+        if char in "[{":
+            depth += 1
+            if depth > limit:
+                return True
+        elif char in "]}" and depth > 0:
+            depth -= 1
+    return False
 
 
 def _cut(body: bytes, sizes: List[int]) -> List[bytes]:

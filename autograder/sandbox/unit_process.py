@@ -1,0 +1,339 @@
+"""The grader's process for one student: unprivileged, in a view and on a disk of its own.
+
+Each student is graded in a process of its own (:mod:`autograder.unit`). It runs no line of the
+student's (their code runs in its sandboxes), but it reads their files and talks to their code,
+so it is built as if it could be taken over. Where the grader runs as root (which it needs to
+give each student a user of their own), the process for a student does not keep root:
+
+- it runs as the student's own unprivileged user (:func:`autograder.sandbox.unit_user`), with
+  no capability and no way to gain one (``no_new_privs``), its address space bounded
+  (``Limits.grader_memory_bytes``), no network, and in the student's control groups, so the
+  CPU, memory and process limits it shares with that student's sandboxes hold for it too;
+- it sees a view of the machine of its own (a mount namespace made by bubblewrap): the system,
+  the Python environment and the course's code read-only, the course for this grading (with
+  its hidden tests) read-only at ``/unit/course``, the student's files read-only at
+  ``/unit/submission``, and ``/unit/out``, the one folder of the machine it writes to (its
+  result). Nothing else: not the repository's ``solutions/``, not the class's results or
+  gradebook, not another student's files;
+- everything it and the student's sandboxes write (nbgrader's trees, the notebooks, the
+  missions' bags, the sandboxes' own files and ``/tmp``) lies on a file system of
+  ``Limits.disk_bytes`` of its own (``/unit``, in memory): a student who fills it fills their
+  own grading only, never the disk the class is graded on.
+
+The student's sandboxes then run inside it, as bubblewrap sandboxes without root: a user
+namespace of the same user, in which no further one can be made
+(:func:`autograder.sandbox.bubblewrap.sandboxed_command`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any, Dict, List, Optional
+
+from autograder.sandbox.bubblewrap import (
+    GRADER_TASKS,
+    Limits,
+    _parents,
+    _readonly_paths,
+    joined,
+    student_groups,
+)
+
+__all__ = ["UNIT_INSIDE", "UNIT_MARGIN_S", "apart", "run_unit", "unit_command", "unit_seconds"]
+
+#: Where the grader's process for a student sees its own folder.
+UNIT_INSIDE = "/unit"
+#: The variables of the grader's environment the process for a student keeps (the course's
+#: own switches); every other one is left behind.
+KEPT_PREFIX = "DUCKIE_"
+
+
+def apart(use_sandbox: bool) -> bool:
+    """Whether the process for a student runs apart from the grader (as root, with a sandbox)."""
+    return use_sandbox and os.geteuid() == 0
+
+
+def unit_limits(limits: Limits) -> Limits:
+    """The limits of the student's control groups when the grader's process for them is in too."""
+    return dataclasses.replace(limits, processes=limits.processes + GRADER_TASKS)
+
+
+def _grader_paths() -> List[str]:
+    """What the process for a student sees read-only: the sandbox's view, and the grader."""
+    grader = str(Path(__file__).resolve().parents[1])
+    paths = [*_readonly_paths(), grader]
+    # A path inside another one is shown with it.
+    return [
+        path
+        for path in paths
+        if not any(path != other and path.startswith(other.rstrip("/") + "/") for other in paths)
+    ]
+
+
+def unit_command(
+    command: List[str], folder: Path, course: Path, limits: Limits, uid: int
+) -> List[str]:
+    """The command line that runs ``command`` as the grader's process for one student.
+
+    Args:
+        command: what to run (``python -I -m autograder.unit /unit``).
+        folder: the grader's folder for this student: ``task.json`` and ``submission/``, shown
+            read-only, and ``out/`` (owned by ``uid``), shown writable; its own mode keeps
+            everyone else out.
+        course: the course's folder for this grading (``source/``, ``release/``,
+            ``gradebook.db``), readable by ``uid``, shown read-only.
+        limits: what the student may use (``disk_bytes``, ``grader_memory_bytes``, the
+            control groups).
+        uid: the student's user, which the process becomes.
+    """
+    import shutil
+
+    bwrap = shutil.which("bwrap") or "bwrap"
+    args = [
+        bwrap,
+        "--unshare-net",
+        "--unshare-ipc",
+        "--unshare-uts",
+        "--die-with-parent",
+        "--new-session",
+        "--symlink", "usr/lib", "/lib",
+        "--symlink", "usr/lib64", "/lib64",
+        "--symlink", "usr/bin", "/bin",
+        "--symlink", "usr/sbin", "/sbin",
+        "--perms", "1777", "--size", str(64 * 1024**2), "--tmpfs", "/tmp",
+    ]  # fmt: skip
+    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
+    for path in _grader_paths():
+        for parent in _parents(path):
+            if parent not in made:
+                args += ["--perms", "0755", "--dir", parent]
+                made.add(parent)
+        args += ["--ro-bind", path, path]
+        made.add(path)
+    args += [
+        "--dev", "/dev",
+        # The machine's own /proc: the sandboxes made inside mount a /proc of their own, which
+        # the kernel allows only where one is already shown whole. Its processes are not this
+        # user's to touch.
+        "--bind", "/proc", "/proc",
+        "--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", UNIT_INSIDE,
+        "--perms", "1777", "--dir", f"{UNIT_INSIDE}/tmp",
+        "--ro-bind", str(folder / "task.json"), f"{UNIT_INSIDE}/task.json",
+        "--ro-bind", str(folder / "submission"), f"{UNIT_INSIDE}/submission",
+        "--ro-bind", str(course), f"{UNIT_INSIDE}/course",
+        "--bind", str(folder / "out"), f"{UNIT_INSIDE}/out",
+        "--chdir", UNIT_INSIDE,
+        # Only to become the student's user just below; setpriv then drops every capability.
+        "--cap-add", "CAP_SETUID",
+        "--cap-add", "CAP_SETGID",
+        "setpriv",
+        f"--reuid={uid}",
+        f"--regid={uid}",
+        "--clear-groups",
+        "--no-new-privs",
+        "--inh-caps=-all",
+        "--bounding-set=-all",
+        "prlimit",
+        f"--as={limits.grader_memory_bytes}",
+        f"--nproc={limits.processes + GRADER_TASKS}",
+        f"--fsize={limits.file_bytes}",
+        "--core=0",
+        "--",
+        "env",
+        "-i",
+        *[f"{key}={value}" for key, value in _environment().items()],
+        *command,
+    ]  # fmt: skip
+    return joined(student_groups(unit_limits(limits)), args)
+
+
+def _environment() -> Dict[str, str]:
+    """The environment of the process for a student: its own, and the course's switches."""
+    base = {
+        "HOME": f"{UNIT_INSIDE}/tmp",
+        "TMPDIR": f"{UNIT_INSIDE}/tmp",
+        "USER": "grader",
+        "LOGNAME": "grader",
+        # nbgrader runs alembic by name: the environment's programs first.
+        "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin",
+        "LANG": "C.UTF-8",
+        "MPLBACKEND": "Agg",
+        "MPLCONFIGDIR": f"{UNIT_INSIDE}/tmp/matplotlib",
+        "PYTHONDONTWRITEBYTECODE": "1",
+        "OPENBLAS_NUM_THREADS": "1",
+        "OMP_NUM_THREADS": "1",
+        "MKL_NUM_THREADS": "1",
+    }
+    base.update({key: value for key, value in os.environ.items() if key.startswith(KEPT_PREFIX)})
+    return base
+
+
+#: Seconds a unit may take besides its notebooks' and mission's limits (nbgrader's own work).
+UNIT_MARGIN_S = 300
+
+
+def unit_seconds(task: Dict[str, Any]) -> float:
+    """The wall time a student's unit may take: each notebook's limit, the missions', a margin."""
+    from autograder.driving import MISSIONS
+
+    limits = task["limits"]
+    driving = len(MISSIONS) * limits["mission_seconds"] if task.get("driving") else 0
+    return len(task["names"]) * limits["submission_seconds"] + driving + UNIT_MARGIN_S
+
+
+def _pdeathsig() -> None:  # pragma: no cover - runs in the child before exec
+    """Die with the worker that started this unit (Linux), so none outlives a killed worker."""
+    import ctypes
+
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+def run_unit(
+    task: Dict[str, Any], files: Dict[str, bytes], course: Path, scratch: Optional[str] = None
+) -> Dict[str, Any]:
+    """Grade one student in a process of its own; what it found, as plain data.
+
+    Args:
+        task: the student, the assignments, the limits (see :mod:`autograder.grade`).
+        files: the student's files, ``"NAME/relative/path" -> bytes``, already read safely.
+        course: a folder with the class's ``source/``, ``release/`` and ``gradebook.db``.
+        scratch: the folder the unit's own temporary folder goes in (the system's by default).
+
+    Returns:
+        ``{"result": ..., "autograded": {NAME: notebook text}}``, the result as
+        :func:`autograder.results.to_data` writes it; when the unit itself stopped (its time
+        limit, a crash), a result with ``complete`` false and a sentence saying why.
+    """
+    from autograder.sandbox import end_student_groups, unit_user
+
+    seconds = unit_seconds(task)
+    # The student's user id, chosen here: whatever ends the unit, its control groups go with it.
+    uid = unit_user()
+    with tempfile.TemporaryDirectory(prefix="duckie-unit-", dir=scratch) as folder:
+        try:
+            return _run_unit(task, files, course, Path(folder), seconds, uid)
+        finally:
+            end_student_groups(uid)
+
+
+def _run_unit(
+    task: Dict[str, Any],
+    files: Dict[str, bytes],
+    course: Path,
+    base: Path,
+    seconds: float,
+    uid: int,
+) -> Dict[str, Any]:
+    """:func:`run_unit` in folder ``base``, the student running as user ``uid``.
+
+    As root with the sandbox, the unit's process runs apart (see this module's docstring): as
+    user ``uid``, seeing ``base``'s ``task.json`` and ``submission/`` and the course
+    read-only, writing only ``base/out``, on a file system of the student's own. Otherwise it
+    runs as the grader does. Either way it is started isolated (``python -I``): neither the
+    folder ``duckie grade`` was started from nor a variable such as ``PYTHONPATH`` puts a
+    module of anyone's on its path.
+    """
+    from autograder.files import write_files
+
+    separate = apart(bool(task["use_sandbox"]))
+    folder = Path(UNIT_INSIDE) if separate else base
+    write_files(base / "submission", files)
+    (base / "submission").mkdir(exist_ok=True)  # an empty submission is graded too
+    (base / "out").mkdir()
+    if separate:
+        course = _readable_course(course, base)
+    (base / "task.json").write_text(
+        json.dumps(
+            {**task, "course_dir": str(folder / "course" if separate else course), "uid": uid}
+        ),
+        encoding="utf-8",
+    )
+    command = [sys.executable, "-I", "-m", "autograder.unit", str(folder)]
+    if separate:
+        for path in [base / "out", base / "task.json", *(base / "submission").rglob("*")]:
+            os.chown(path, uid, uid, follow_symlinks=False)
+        limits = dataclasses.replace(Limits(**task["limits"]), uid=uid)
+        command = unit_command(command, base, course, limits, uid)
+    stopped = None
+    try:
+        finished = subprocess.run(
+            command,
+            capture_output=True,
+            text=True,
+            timeout=seconds,
+            check=False,
+            preexec_fn=_pdeathsig,
+            cwd=base,
+        )
+        if finished.returncode != 0 or not (base / "out" / "result.json").is_file():
+            lines = [line for line in finished.stderr.splitlines() if line.strip()]
+            stopped = (
+                f"the grader's process for this student stopped ({lines[-1][:300]})"
+                if lines
+                else f"the grader's process for this student ended with {finished.returncode}"
+            )
+    except subprocess.TimeoutExpired:
+        stopped = f"the grading of this student took more than {seconds:.0f} s and was stopped"
+    if stopped is not None:
+        return _stopped_unit(task, stopped)
+    # Read as any file a student's grading wrote: regular files only, bounded.
+    from autograder.files import UnsafeFile, read_regular
+
+    limit = int(task["limits"].get("output_bytes", RESULT_LIMIT))
+    try:
+        answer = json.loads(read_regular(base / "out", "result.json", RESULT_LIMIT))
+    except (UnsafeFile, ValueError) as error:
+        return _stopped_unit(task, f"its result could not be read ({error})")
+    autograded = {}
+    for name in task["names"]:
+        try:
+            text = read_regular(base / "out" / "autograded", f"{name}.ipynb", limit)
+        except (UnsafeFile, OSError):
+            continue
+        autograded[name] = text.decode("utf-8", errors="replace")
+    return {"result": answer, "autograded": autograded}
+
+
+#: The largest result a unit may write, in bytes.
+RESULT_LIMIT = 64 * 1024**2
+
+
+def _stopped_unit(task: Dict[str, Any], stopped: str) -> Dict[str, Any]:
+    """A unit's answer when it stopped before its result: not graded, graded again next run."""
+    from autograder.results import not_graded
+
+    return {
+        "result": {
+            "student": task["student"],
+            "cells": {},
+            "problems": [not_graded(stopped)],
+            "messages": {},
+            "missions": {},
+            "complete": False,
+        },
+        "autograded": {},
+    }
+
+
+def _readable_course(course: Path, base: Path) -> Path:
+    """A copy of the course in ``base`` that the student's user may read, and no one else.
+
+    The course holds the hidden tests: the copy lies in ``base``, whose mode lets no one else
+    in, and the unit's process sees only the copy (read-only).
+    """
+    copy = base / "course"
+    shutil.copytree(course, copy)
+    for path in [copy, *copy.rglob("*")]:
+        if not path.is_symlink():
+            path.chmod(0o755 if path.is_dir() else 0o644)
+    base.chmod(0o700)
+    return copy
