@@ -66,11 +66,12 @@ def _sandboxed_execute_class(unit: _Unit):
                     executed = None
                     problem = "answered with something that is not the notebook sent"
             if executed is not None:
+                outputs = run.outputs
                 for index, grade_id in tests.items():
                     cell = executed.cells[index]
                     cell.source = nb.cells[index].source
                     cell.metadata.pop(METADATA_KEY, None)
-                    ran = run.outputs.get(grade_id)
+                    ran = outputs.get(grade_id)
                     cell.outputs = (
                         [nbformat.from_dict(out) for out in ran]
                         if ran is not None
@@ -117,6 +118,7 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
     import copy
 
     from autograder.sandbox.inside.notebook import METADATA_KEY
+    from autograder.verdict import split_hidden
 
     sent = copy.deepcopy(notebook)
     tests: Dict[int, str] = {}
@@ -125,9 +127,11 @@ def _remote_tests(notebook: Any) -> Tuple[Any, Dict[int, str]]:
         grade_id = cell.get("metadata", {}).get("nbgrader", {}).get("grade_id", "")
         if not _is_test(cell):
             continue
-        cell.source = ""  # a copy of a test (never left by the repair) is sent empty too
+        source, cell.source = cell.source, ""  # a copy of a test is sent empty too
         if grade_id not in tests.values():
-            cell.metadata[METADATA_KEY] = {"remote": True}
+            # Whether it has hidden tests, which run after the notebook's last cell.
+            hidden = bool(split_hidden(source)[1])
+            cell.metadata[METADATA_KEY] = {"remote": True, "hidden": hidden}
             tests[index] = grade_id
     return sent, tests
 
@@ -145,50 +149,76 @@ class _TestsHere:
 
     The tests' namespace and the names they may ask of the kernel come from the course's own
     notebook (``course``), never from the submission: a cell a student added runs in the
-    sandbox only.
+    sandbox only. A test's visible part runs where the notebook reaches it, its hidden part
+    after the notebook's last cell (:class:`autograder.verdict.TestRun`), both through one
+    :class:`autograder.calls.Link`, so a student's object fetched at the test's place is the
+    one called later.
     """
 
     def __init__(
         self, unit: Any, cells: List[Any], tests: Dict[int, str], course: List[Any]
     ) -> None:
-        self.unit = unit
-        self.course = course
-        self.sources = {grade_id: cells[index].source for index, grade_id in tests.items()}
-        self.space: Optional[Dict[str, Any]] = None
-        self.outputs: Dict[str, List[Dict[str, Any]]] = {}
+        from autograder.calls import Link
+        from autograder.sandbox.server import SHARED_INSIDE
+        from autograder.verdict import answer_names, prelude
 
-    def test(self, grade_id: str, ask: Any) -> None:
-        """Run test ``grade_id`` (one the grader sent empty), asking the kernel through ``ask``."""
-        from autograder.calls import Link, answer_names, prelude, run_test
+        self.unit = unit
+        self.sources = {grade_id: cells[index].source for index, grade_id in tests.items()}
+        self.space: Dict[str, Any] = prelude(course)
+        self.answers = answer_names(course)
+        self.runs: Dict[str, Any] = {}
+        paths = {str(unit.shared): SHARED_INSIDE} if unit.use_sandbox else {}
+        self.link = Link(self._send, paths)
+        self.ask: Any = None
+        self.until = 0.0
+
+    @property
+    def outputs(self) -> Dict[str, List[Dict[str, Any]]]:
+        """Each test's outputs, by ``grade_id``; a test whose hidden part never ran fails."""
+        for run in self.runs.values():
+            run.not_run()
+        return {grade_id: run.outputs for grade_id, run in self.runs.items()}
+
+    def _send(self, request: Dict[str, Any]) -> str:
+        seconds = self.unit.limits.cell_seconds
+        return self.ask(json.dumps(request), self.until, seconds)
+
+    def test(self, kind: str, grade_id: str, ask: Any) -> None:
+        """Run a part of test ``grade_id`` (one the grader sent empty), asking through ``ask``.
+
+        ``kind`` is ``"test"`` (its visible part), ``"hidden"`` (its hidden part) or
+        ``"rerun"`` (all of it anew, in a new kernel after one died, if its hidden part was
+        still to run).
+        """
         from autograder.robots import robot_names
+        from autograder.verdict import TestRun
 
         if grade_id not in self.sources:
             return
-        if self.space is None:
-            self.space = prelude(self.course)
-            self.answers = answer_names(self.course)
-        seconds = self.unit.limits.cell_seconds
-        until = time.monotonic() + seconds
+        run = self.runs.get(grade_id)
+        if kind != "test" and (run is None or not run.waiting):
+            return
+        self.ask, self.until = ask, time.monotonic() + self.unit.limits.cell_seconds
         # A test that runs the student's nodes: the robot here, the nodes in the sandbox.
-        self.space.update(robot_names(self.unit, self.space, until))
-
-        def send(request: Dict[str, Any]) -> str:
-            return ask(json.dumps(request), until, seconds)
-
-        from autograder.sandbox.server import SHARED_INSIDE
-
-        paths = {str(self.unit.shared): SHARED_INSIDE} if self.unit.use_sandbox else {}
-        link = Link(send, paths)
+        robot = robot_names(self.unit, self.space, self.until)
+        self.space.update(robot)
         saved = tempfile.tempdir
         tempfile.tempdir = str(self.unit.shared)
+        before = self.link.calls
         try:
-            self.outputs[grade_id] = run_test(
-                self.sources[grade_id], grade_id, self.space, link, self.answers
-            )
+            if kind == "hidden":
+                run.cell.update(robot)
+                run.run_hidden()
+            else:
+                run = TestRun(self.sources[grade_id], grade_id, self.space, self.answers)
+                self.runs[grade_id] = run
+                run.run_visible(self.link)
+                if kind == "rerun":
+                    run.run_hidden()
         finally:
             tempfile.tempdir = saved
-        self.unit.timings["calls"] = self.unit.timings.get("calls", 0) + link.calls
-        largest = max(self.unit.timings.get("largest_answer", 0), link.largest)
+        self.unit.timings["calls"] = self.unit.timings.get("calls", 0) + self.link.calls - before
+        largest = max(self.unit.timings.get("largest_answer", 0), self.link.largest)
         self.unit.timings["largest_answer"] = largest
 
 

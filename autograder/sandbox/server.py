@@ -83,9 +83,12 @@ class NotebookServer:
         Args:
             name: the notebook's folder.
             text: the notebook to run.
-            tests: called as ``tests(grade_id, ask)`` when the run reaches a test the grader
-                runs on its side; ``ask(request, until, seconds)`` sends a call to the kernel
-                and returns its answer (a text).
+            tests: called as ``tests(kind, grade_id, ask)`` when the run reaches a test the
+                grader runs on its side (``kind``: ``"test"``, its visible part where the
+                notebook reaches it; ``"hidden"``, its hidden part after the last cell;
+                ``"rerun"``, all of it again, in a new kernel after one died);
+                ``ask(request, until, seconds)`` sends a call to the kernel and returns its
+                answer (a text).
         """
         from autograder.calls import Abandon, CallsBroken
 
@@ -122,13 +125,14 @@ class NotebookServer:
             _write_all(self.process.stdin, request, deadline)
             while True:
                 reply = self._reply(deadline)
-                if "test" in reply and tests is not None:
-                    tests(str(reply["test"]), ask)
+                kind = next((kind for kind in wire.TEST_KINDS if kind in reply), None)
+                if kind is not None and tests is not None:
+                    tests(kind, str(reply[kind]), ask)
                     if final:
                         reply = final[0]
                         break
                     _write_all(self.process.stdin, wire.encode({"end": True}), deadline)
-                elif "answer" not in reply and "test" not in reply:
+                elif "answer" not in reply and kind is None:
                     break
         except (TimeoutError, OSError, EOFError, ValueError, _TooMuch, Abandon) as error:
             # A test's call that could not go on ended the run the same ways.

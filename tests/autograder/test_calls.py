@@ -12,8 +12,9 @@ import math
 import numpy as np
 import pytest
 
-from autograder import calls
-from autograder.calls import CallsBroken, Link, Remote, decode, encode, run_test
+from autograder import calls, verdict
+from autograder.calls import CallsBroken, Link, Remote, decode, encode
+from autograder.verdict import run_test
 
 
 class FakeKernel:
@@ -173,7 +174,7 @@ def test_the_tests_imports_and_definitions_are_the_graders():
         {"cell_type": "code", "metadata": {}, "source": "%matplotlib inline\nimport math as m\n"},
         {"cell_type": "code", "metadata": {"nbgrader": {"solution": True}}, "source": "import os"},
     ]
-    space = calls.prelude(cells)
+    space = verdict.prelude(cells)
     assert space["m"] is math
     assert "os" not in space
     link, kernel = _link({"m": "the student's m"})
@@ -259,11 +260,17 @@ def test_only_the_grader_marks_the_tests_it_runs_and_none_of_their_code_is_sent(
         nbformat.v4.new_code_cell("print('mine')", metadata={"duckie_grading": {"remote": True}}),
         nbformat.v4.new_code_cell("assert f(1) == 1  # SECRET", metadata={"nbgrader": test}),
         nbformat.v4.new_code_cell("assert f(2) == 2  # SECRET", metadata={"nbgrader": test}),
+        nbformat.v4.new_code_cell(
+            "assert f(3) == 3\n### BEGIN HIDDEN TESTS\nassert f(4) == 4  # SECRET\n",
+            metadata={"nbgrader": {**test, "grade_id": "test_g"}},
+        ),
     ]
     sent, tests = _remote_tests(notebook)
-    assert tests == {2: "test_f"}
+    assert tests == {2: "test_f", 4: "test_g"}
     assert "SECRET" not in nbformat.writes(sent)
+    assert "f(3)" not in nbformat.writes(sent)
+    # The sandbox learns which tests have a hidden part (it runs after the last cell).
     assert [cell.metadata.get("duckie_grading") for cell in sent.cells] == [
-        None, None, {"remote": True}, None,
+        None, None, {"remote": True, "hidden": False}, None, {"remote": True, "hidden": True},
     ]  # fmt: skip
     assert "SECRET" in notebook.cells[2].source  # the grader's own copy keeps the test

@@ -17,9 +17,10 @@ import pytest
 from adversarial.cases import NEVER_DRIVES
 from course.coursetools import NAMES, SOLUTIONS, load_solution_nb, nbgrader, source, wrong_solutions
 
-from autograder.calls import Remote, free_names, prelude, run_test
+from autograder.calls import Remote
 from autograder.robots import robot_names
 from autograder.sandbox import Limits
+from autograder.verdict import free_names, prelude, run_test
 from duckielib.tools.apart import ApartDuckiebot
 
 pytestmark = pytest.mark.slow

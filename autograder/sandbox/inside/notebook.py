@@ -20,7 +20,7 @@ import json
 import select
 import time
 from pathlib import Path
-from typing import Any, List, Optional
+from typing import Any, Callable, List, Optional
 
 from . import guard
 from .processes import kill_kernel_copies
@@ -78,30 +78,58 @@ def _guarded_client_class():
     memory); nbclient is used directly because importing nbgrader in the sandbox costs about
     0.8 s of CPU per notebook, more than many notebooks' own cells.
     """
+    # Over 80 lines: the class is made here so that nbclient is imported only when a notebook
+    # runs (this module loads with the standard library only); each of its methods is short.
     import nbformat
     from nbclient import NotebookClient
 
     class GuardedClient(NotebookClient):
         async def async_execute_cell(self, cell, cell_index, execution_count=None, **kwargs):
+            self.current = cell_index
             if not getattr(self, "guarded", False):
                 self.guarded = True
                 await self._run_hidden(_guard_code(), cell_index)
             meta = cell.get("metadata", {}).get("nbgrader", {})
             if cell.cell_type == "code" and meta.get("grade"):
-                changed = await self._run_hidden(guard.CHECK, cell_index)
-                if changed:
-                    self.replaced[meta.get("grade_id", f"cell {cell_index + 1}")] = changed
+                await self._check(cell_index, meta.get("grade_id", f"cell {cell_index + 1}"))
             if cell.get("metadata", {}).get(METADATA_KEY, {}).get("remote"):
-                await self._serve_test(cell, cell_index, meta.get("grade_id", ""))
-                return cell
-            try:
-                return await super().async_execute_cell(cell, cell_index, execution_count, **kwargs)
-            finally:
-                if getattr(self, "sandboxed", False):
-                    kill_kernel_copies(getattr(self.km.provisioner, "pid", None))
+                await self._serve(cell_index, {"test": meta.get("grade_id", "")})
+                cell.outputs = []
+                self.code_cells_executed += 1
+                cell.execution_count = self.code_cells_executed
+            else:
+                try:
+                    await super().async_execute_cell(cell, cell_index, execution_count, **kwargs)
+                finally:
+                    if getattr(self, "sandboxed", False):
+                        kill_kernel_copies(getattr(self.km.provisioner, "pid", None))
+            if cell_index == len(self.nb.cells) - 1:
+                await self._after_last_cell(cell_index)
+            return cell
 
-        async def _serve_test(self, cell, index, grade_id):
-            """A test the grader runs on its side: relay its calls until it says it is done.
+        async def _check(self, index, label):
+            """Put back what the student's code replaced that tests rely on; note what it was."""
+            changed = await self._run_hidden(guard.CHECK, index)
+            if changed:
+                self.replaced[label] = changed
+
+        async def _after_last_cell(self, index):
+            """What the notebook left is noted; then the tests' hidden parts run (or run again).
+
+            What is said of the notebook (files written outside the student's folders,
+            processes left running) is read now, before any hidden input reaches the student's
+            code: nothing after this point is read back but the tests' own verdicts.
+            """
+            self.writes = guard.writes_outside()
+            if self.strays is not None:
+                self.left = self.strays()
+            kind = "rerun" if self.rerun is not None else "hidden"
+            for grade_id in self.rerun if self.rerun is not None else self.hidden:
+                await self._check(index, f"the hidden part of {grade_id}")
+                await self._serve(index, {kind: grade_id})
+
+        async def _serve(self, index, message):
+            """A test (or part) the grader runs on its side: relay its calls until it is done.
 
             The cell's code never comes here (its source is empty). While the test runs, the
             kernel serves the calls (``serve`` of ``autograder/calls.py``, one hidden
@@ -116,7 +144,7 @@ def _guarded_client_class():
                 await self._run_hidden(_calls_code(), index)
             relay = Relay(self.channel, self.timeout or 60)
             try:
-                self.channel.say({"test": grade_id})
+                self.channel.say(message)
                 talk = asyncio.ensure_future(asyncio.to_thread(relay.run))
                 try:
                     code = f"__import__('sys').modules[{KERNEL_MODULE!r}].serve({relay.path!r})"
@@ -126,9 +154,6 @@ def _guarded_client_class():
                     await talk
             finally:
                 relay.close()
-            cell.outputs = []
-            self.code_cells_executed += 1
-            cell.execution_count = self.code_cells_executed
 
         async def _run_hidden(self, source, index):
             """Run ``source`` in the kernel without a cell of its own; its value, if a list."""
@@ -350,17 +375,97 @@ def execute_notebook(
     zygote: Optional[Zygote],
     sandboxed: bool = False,
     channel: Optional[Channel] = None,
+    strays: Optional[Callable[[], int]] = None,
 ) -> None:
     """Run every cell of ``notebook`` in a new kernel working in ``folder``; note the problems.
 
     In a sandbox of its own (``sandboxed``), the copies of the kernel a cell forked are killed
-    after the cell (:func:`kill_kernel_copies`).
+    after the cell (:func:`kill_kernel_copies`). The tests the grader runs on its side
+    (``channel``) run where the notebook reaches them, and their hidden parts after its last
+    cell (see :mod:`autograder.verdict`). If the kernel dies before the last cell, the cells
+    before the one it died in run again in a new kernel, and the tests among them run there
+    whole: a kernel's death costs the tests after it only.
+
+    Args:
+        notebook: the notebook to run, changed in place (outputs, metadata).
+        folder: the kernel's working folder.
+        cell_seconds: the time limit of a cell.
+        zygote: the process kernels are forked from, or None for the usual launch.
+        sandboxed: whether this runs in a sandbox of its own.
+        channel: the way to the grader, which runs the tests on its side.
+        strays: kills what the notebook left running (not the kernel) and says how many; called
+            after the last cell, before any hidden test.
 
     The problems (a kernel that died, helpers the tests rely on that had been replaced, outputs
-    cut) go into the notebook's metadata under :data:`METADATA_KEY`.
+    cut, processes left running) go into the notebook's metadata under :data:`METADATA_KEY`.
     """
     from nbclient.exceptions import DeadKernelError
 
+    executor = _client(notebook, folder, cell_seconds, zygote, sandboxed, channel)
+    executor.strays = strays
+    executor.hidden = [
+        cell.metadata.nbgrader.get("grade_id", "")
+        for cell in notebook.cells
+        if cell.get("metadata", {}).get(METADATA_KEY, {}).get("hidden")
+    ]
+    problems = []
+    try:
+        executor.execute()
+    except DeadKernelError:
+        if executor.writes is None:  # before the last cell: the cells after it never ran
+            problems.append(
+                "the kernel died (os._exit, a crash, or more memory than the limit); the cells "
+                "after it did not run"
+            )
+            # Said as they are now: what runs again below sees the tests' hidden inputs.
+            executor.writes = guard.writes_outside()
+            executor.left = strays() if strays is not None else None
+            _run_again(notebook, executor, folder, cell_seconds, zygote, sandboxed, channel)
+        else:
+            problems.append(
+                "the kernel died (os._exit, a crash, or more memory than the limit) while the "
+                "hidden tests ran; those after it did not run"
+            )
+        mark_not_run(
+            notebook,
+            "This cell did not run: the notebook's kernel died in an earlier cell "
+            "(os._exit, a crash, or more memory than the limit).",
+        )
+    except Exception as error:  # the grader reports it with the notebook
+        problems.append(f"the notebook stopped running: {type(error).__name__}: {error}")
+        mark_not_run(notebook, f"This cell did not run: {type(error).__name__}: {error}")
+    _note_problems(notebook, executor, problems)
+
+
+def _note_problems(notebook: Any, executor: Any, problems: List[str]) -> None:
+    """Add what the run found to ``problems``, into the notebook's metadata."""
+    for grade_id, changed in executor.replaced.items():
+        problems.append(
+            f"before {grade_id}, the student's code had replaced {', '.join(changed)}; "
+            "the originals were put back for the test"
+        )
+    problems += limit_outputs(notebook)
+    # Read (and so removed for the next notebook) in any case; said as it was after the last
+    # cell when it was read then, before the hidden tests.
+    last = guard.writes_outside()
+    problems += executor.writes if executor.writes is not None else last
+    if executor.left:
+        problems.append(
+            f"the notebook left {executor.left} process{'es' if executor.left > 1 else ''} "
+            "running after its last cell; the grader stopped them"
+        )
+    notebook.metadata[METADATA_KEY] = {"problems": problems, "strays": executor.left is not None}
+
+
+def _client(
+    notebook: Any,
+    folder: str,
+    cell_seconds: int,
+    zygote: Optional[Zygote],
+    sandboxed: bool,
+    channel: Optional[Channel],
+) -> Any:
+    """The client of nbclient for ``notebook``, set as nbgrader's Execute sets it."""
     options = {"kernel_manager_class": forking_manager_class(zygote)} if zygote else {}
     executor = _guarded_client_class()(
         notebook,
@@ -379,27 +484,48 @@ def execute_notebook(
     executor.replaced = {}
     executor.sandboxed = sandboxed
     executor.channel = channel
-    problems = []
-    try:
+    executor.current = 0
+    executor.strays = None
+    executor.hidden = []
+    executor.rerun = None
+    executor.writes = None
+    executor.left = None
+    return executor
+
+
+def _run_again(
+    notebook: Any,
+    died: Any,
+    folder: str,
+    cell_seconds: int,
+    zygote: Optional[Zygote],
+    sandboxed: bool,
+    channel: Optional[Channel],
+) -> None:
+    """After the kernel died in cell ``died.current``: the tests before it, whole, in a new kernel.
+
+    The cells before the one the kernel died in run again (their outputs are not kept), then
+    each test among them with hidden tests runs whole (the grader runs only those whose hidden
+    part was still to run). If the new kernel dies too, those tests stay without a verdict.
+    """
+    import copy
+
+    from nbclient.exceptions import DeadKernelError
+
+    before = [copy.deepcopy(cell) for cell in notebook.cells[: died.current]]
+    tests = [
+        cell.metadata.nbgrader.get("grade_id", "")
+        for cell in before
+        if cell.get("metadata", {}).get(METADATA_KEY, {}).get("hidden")
+    ]
+    if channel is None or not tests:
+        return
+    for cell in before:
+        if cell.get("metadata", {}).get(METADATA_KEY, {}).get("remote"):
+            cell.metadata.pop(METADATA_KEY)  # run as an empty cell: the tests run at the end
+    again = copy.deepcopy(notebook)
+    again.cells = before
+    executor = _client(again, folder, cell_seconds, zygote, sandboxed, channel)
+    executor.rerun = tests
+    with contextlib.suppress(DeadKernelError):
         executor.execute()
-    except DeadKernelError:
-        problems.append(
-            "the kernel died (os._exit, a crash, or more memory than the limit); the cells "
-            "after it did not run"
-        )
-        mark_not_run(
-            notebook,
-            "This cell did not run: the notebook's kernel died in an earlier cell "
-            "(os._exit, a crash, or more memory than the limit).",
-        )
-    except Exception as error:  # the grader reports it with the notebook
-        problems.append(f"the notebook stopped running: {type(error).__name__}: {error}")
-        mark_not_run(notebook, f"This cell did not run: {type(error).__name__}: {error}")
-    for grade_id, changed in executor.replaced.items():
-        problems.append(
-            f"before {grade_id}, the student's code had replaced {', '.join(changed)}; "
-            "the originals were put back for the test"
-        )
-    problems += limit_outputs(notebook)
-    problems += guard.writes_outside()
-    notebook.metadata[METADATA_KEY] = {"problems": problems}

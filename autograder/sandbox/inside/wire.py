@@ -13,8 +13,10 @@ The grader says:
 
 The server answers:
 
-- ``{"test": GRADE_ID}``: the run reached a test the grader runs on its side; calls may
-  follow, until ``end``;
+- ``{"test": GRADE_ID}``: the run reached a test the grader runs on its side (its visible
+  part); calls may follow, until ``end``. ``{"hidden": GRADE_ID}``, after the notebook's last
+  cell: the test's hidden part; ``{"rerun": GRADE_ID}``: the whole test again, in a new kernel
+  after one died (see ``autograder/verdict.py``);
 - ``{"answer": TEXT}``: the kernel's answer to a call;
 - ``{"notebook": TEXT}``: the executed notebook, the run's last word;
 - ``{"problem": TEXT}``: why the notebook could not be run, the run's last word instead.
@@ -30,6 +32,7 @@ from typing import Any, Dict, Optional, Union
 __all__ = [
     "ANSWER_LIMIT",
     "HEADER",
+    "TEST_KINDS",
     "Channel",
     "decode",
     "encode",
@@ -41,6 +44,8 @@ __all__ = [
 
 #: The bytes of a frame's length.
 HEADER = 8
+#: The messages of the server that start a test's calls (see above).
+TEST_KINDS = ("test", "hidden", "rerun")
 #: The longest answer of the student's code to one call of a test, in bytes of JSON. The
 #: course's own answers need at most about 1.3 MB (a camera image, in base64); the grader
 #: reads no more, so one answer cannot swell the grader's memory.
