@@ -80,7 +80,10 @@ def _shorten(text: str) -> str:
 
 
 def _e(value: object) -> str:
-    return html.escape(str(value))
+    """``value`` for the page: escaped, without a terminal's control sequences."""
+    from duckielib.tools.handin import without_controls
+
+    return html.escape(without_controls(str(value)))
 
 
 def _tests_section(result: StudentResult, names: List[str], answers: Set[Key]) -> List[str]:

@@ -492,11 +492,15 @@ _FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
 
 
 def _text_cell(text: str) -> str:
-    """A text of grades.csv as written, or as plain text if a spreadsheet would take a formula.
+    """A text of grades.csv as written, as plain text if a spreadsheet would take a formula.
 
-    A leading apostrophe makes it plain text: spreadsheets read it as "text follows" and do
-    not show it.
+    A terminal's control sequences (colours, titles) and other control characters in a
+    student's error text are left out. A leading apostrophe makes it plain text: spreadsheets
+    read it as "text follows" and do not show it.
     """
+    from duckielib.tools.handin import without_controls
+
+    text = without_controls(text)
     return f"'{text}" if text.startswith(_FORMULA_STARTS) else text
 
 

@@ -52,7 +52,10 @@ class StudentResult:
         timings: where the unit's time went, in seconds: ``notebooks`` (the sandboxed runs,
             kernels' starts included), ``cells`` (the cells themselves), ``nbgrader`` (its
             converters and gradebook), ``driving`` (export and mission), ``unit`` (all);
-            ``notebook:NAME``, each notebook's sandboxed run.
+            ``notebook:NAME``, each notebook's sandboxed run. Besides times: ``calls`` (the
+            tests' calls to the student's code), ``largest_answer`` (the longest answer to
+            one, in characters) and ``grader_memory_mb`` (the most memory the grader's process
+            for the student held).
     """
 
     student: str

@@ -44,7 +44,7 @@ def sandbox_launcher(unit: Any) -> Any:
     @contextlib.contextmanager
     def start(sock: Any, arguments: List[str]) -> Iterator[Any]:
         fd = sock.fileno()
-        folder = Path(tempfile.mkdtemp(prefix="nodes-", dir=unit.folder))
+        folder = Path(tempfile.mkdtemp(prefix="nodes-", dir=unit.student_disk))
         shutil.chown(folder, unit.limits.uid, unit.limits.uid)
         solution = COURSE if unit.use_sandbox else str(unit.export)
         command = nodes_command(fd, solution, arguments)

@@ -55,7 +55,16 @@ def _sandboxed_execute_class(unit: _Unit):
             began = time.monotonic()
             sent, tests = _remote_tests(nb)
             run = _TestsHere(unit, nb.cells, tests, _course_cells(unit, name))
-            text, problem = unit.server.run(name, nbformat.writes(sent), run.test)
+            left = unit.limits.student_seconds - unit.timings["notebooks"]
+            if left < 1:
+                why = (
+                    f"was not run: the student's notebooks had used the "
+                    f"{unit.limits.student_seconds} s the grader gives them in all"
+                )
+                text, problem = None, why
+            else:
+                seconds = min(unit.limits.submission_seconds, left)
+                text, problem = unit.server.run(name, nbformat.writes(sent), run.test, seconds)
             executed = None
             if text is not None:
                 try:
@@ -94,6 +103,7 @@ def _sandboxed_execute_class(unit: _Unit):
             found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
             unit.problems.extend(f"{name}: {problem}" for problem in found)
             unit.problems.extend(_cells_that_stopped(name, nb, executed, unit.limits.cell_seconds))
+            unit.problems.extend(_slow_cells(name, nb, executed, unit.limits.slow_cell_seconds))
             return executed, resources
 
     return SandboxedExecute
@@ -299,6 +309,7 @@ class _Unit:
 
     def __post_init__(self) -> None:
         from autograder.sandbox import Limits, unit_user
+        from autograder.sandbox.limits import STUDENT_DISK_VARIABLE
 
         self.student: str = self.task["student"]
         self.names: List[str] = list(self.task["names"])
@@ -309,7 +320,9 @@ class _Unit:
         self.use_sandbox = bool(self.task["use_sandbox"])
         self.course_dir = Path(self.task["course_dir"])
         self.root = self.folder / "nbgrader"
-        self.sandboxes = self.folder / "sandboxes"
+        # The sandboxes write on a file system of the student's own where there is one.
+        self.student_disk = Path(os.environ.get(STUDENT_DISK_VARIABLE) or self.folder)
+        self.sandboxes = self.student_disk / "sandboxes"
         self.export = self.folder / "export"
         self.shared = self.folder / "shared"
         from autograder.sandbox.server import NotebookServer
@@ -374,6 +387,15 @@ class _Unit:
 
             end_student_groups(self.limits.uid)
 
+    def _disk_full(self) -> None:
+        """Say it when the student's code filled the file system it writes on."""
+        size = _full(self.student_disk) if self.student_disk != self.folder else None
+        if size is not None:
+            self.problems.append(
+                f"The notebooks filled the {size} the grader gives a student's files: what they "
+                "wrote after that failed (the cells that raised say where)."
+            )
+
     def _grade(self, api: Any, config: Any, began: float) -> Dict[str, Any]:
         aside: List[str] = []
         handed_in = [name for name in self.course if self.hand_in(name, aside)]
@@ -393,6 +415,7 @@ class _Unit:
             for grade_id, message in failure_messages(graded).items():
                 messages[(name, grade_id)] = message
         self.server.stop()
+        self._disk_full()
         cells, to_grade = _scores(config, self.student, self.names)
         missions: Dict[str, Any] = {}
         if self.task.get("driving"):
@@ -402,7 +425,7 @@ class _Unit:
             if handed_in:
                 missions = drive_missions(
                     self.export,
-                    self.folder / "driving",
+                    self.student_disk / "driving",
                     self.limits,
                     self.use_sandbox,
                     runs=self.runs,
@@ -421,6 +444,10 @@ class _Unit:
         from autograder.results import StudentResult, to_data
 
         self.timings["unit"] = time.monotonic() - began
+        # The most memory this process held, in MB (a student's answers cannot swell it).
+        import resource
+
+        self.timings["grader_memory_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
         return to_data(
             StudentResult(
@@ -430,20 +457,63 @@ class _Unit:
         )  # fmt: skip
 
 
+def _full(folder: Path) -> Optional[str]:
+    """How big ``folder``'s file system is, as a sentence's words, if it is full (or nearly)."""
+    try:
+        stats = os.statvfs(folder)
+    except OSError:
+        return None
+    if stats.f_bavail * stats.f_frsize > 1024**2:
+        return None
+    return f"{stats.f_blocks * stats.f_frsize / 1e6:.0f} MB"
+
+
 def _cell_seconds(notebook: Any) -> float:
     """How long a run notebook's cells took, by the times its kernel recorded."""
+    return sum(_seconds_of(cell) for cell in notebook.cells)
+
+
+def _seconds_of(cell: Any) -> float:
+    """How long one run cell took, by the times its kernel recorded (0 when it does not say)."""
     from datetime import datetime
 
-    total = 0.0
-    for cell in notebook.cells:
-        times = cell.get("metadata", {}).get("execution", {})
-        try:
-            start = datetime.fromisoformat(times["iopub.execute_input"].replace("Z", "+00:00"))
-            end = datetime.fromisoformat(times["shell.execute_reply"].replace("Z", "+00:00"))
-        except (KeyError, TypeError, ValueError, AttributeError):
-            continue
-        total += max(0.0, (end - start).total_seconds())
-    return total
+    times = cell.get("metadata", {}).get("execution", {})
+    try:
+        start = datetime.fromisoformat(times["iopub.execute_input"].replace("Z", "+00:00"))
+        end = datetime.fromisoformat(times["shell.execute_reply"].replace("Z", "+00:00"))
+    except (KeyError, TypeError, ValueError, AttributeError):
+        return 0.0
+    return max(0.0, (end - start).total_seconds())
+
+
+def _slow_cells(name: str, sent: Any, executed: Any, seconds: int) -> List[str]:
+    """One sentence naming the cells outside the tests that took more than ``seconds`` each.
+
+    The times are the kernel's own; the cells are named by position and first line as the
+    grader sent them (see :func:`raised_outside_tests`).
+    """
+    from duckielib.tools.handin import first_line
+
+    slow = [
+        (number, _seconds_of(cell))
+        for number, cell in enumerate(executed.cells, start=1)
+        if cell.cell_type == "code" and not _is_test(sent.cells[number - 1])
+    ]
+    slow = [(number, took) for number, took in slow if took > seconds]
+    if not slow:
+        return []
+    total = sum(took for _, took in slow)
+    shown = ", ".join(
+        f"cell {number} ({first_line(sent.cells[number - 1].source)}): {took:.0f} s"
+        for number, took in slow[:5]
+    )
+    more = f" and {len(slow) - 5} more" if len(slow) > 5 else ""
+    if len(slow) == 1:
+        return [f"{name}: 1 cell took over {seconds} s: {shown}."]
+    return [
+        f"{name}: {len(slow)} cells took over {seconds} s each, {total:.0f} s in all: "
+        f"{shown}{more}."
+    ]
 
 
 def _without(text: str, folder: Path) -> str:

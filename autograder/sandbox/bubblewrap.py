@@ -32,7 +32,7 @@ from autograder.sandbox.groups import (
     remove_when_empty,
     student_groups,
 )
-from autograder.sandbox.limits import NOBODY, Limits
+from autograder.sandbox.limits import NOBODY, STUDENT_DISK_VARIABLE, Limits
 from duckielib.errors import DuckielibError
 
 __all__ = [
@@ -242,11 +242,31 @@ GRADER_TASKS = 256
 def sandbox_tasks(limits: Limits) -> int:
     """The process limit (``RLIMIT_NPROC``) of a sandbox's processes.
 
-    It counts every process of the sandbox's user: as root that user is the student's alone;
-    without root, the grader's own process for the student (:mod:`.unit_process`) is that
-    user too, and may have :data:`GRADER_TASKS` of its own.
+    It counts every process and thread of the sandbox's user. As root, that user is the
+    student's alone. Without root, the grader's own process for the student
+    (:mod:`.unit_process`) is that user too: the sandbox may then have ``limits.processes``
+    more than that user has when it starts, so a fork bomb stops where it stops as root.
     """
-    return limits.processes + (0 if os.geteuid() == 0 else GRADER_TASKS)
+    if os.geteuid() == 0:
+        return limits.processes
+    return limits.processes + min(_tasks_of(os.getuid()), GRADER_TASKS)
+
+
+def _tasks_of(uid: int) -> int:
+    """How many processes and threads user ``uid`` has (what ``RLIMIT_NPROC`` counts)."""
+    count = 0
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = dict(
+                line.split(":", 1) for line in (entry / "status").read_text().splitlines()
+            )
+            if fields["Uid"].split()[0] == str(uid):
+                count += int(fields["Threads"])
+        except (OSError, KeyError, ValueError, IndexError):
+            continue
+    return count
 
 
 @contextlib.contextmanager
@@ -255,14 +275,17 @@ def scratch() -> Iterator[Optional[Path]]:
 
     The grader's own process for a student runs without root, on a file system of that
     student's own (:mod:`.unit_process`): a sandbox's ``/tmp`` lies there too, so everything the
-    student writes counts against one size. As root, None: the sandbox makes its own.
+    student writes counts against one size (the folder :data:`STUDENT_DISK_VARIABLE` names).
+    As root, None: the sandbox makes its own.
     """
     import tempfile
 
     if os.geteuid() == 0:
         yield None
         return
-    folder = Path(tempfile.mkdtemp(prefix="sandbox-tmp-"))
+    folder = Path(
+        tempfile.mkdtemp(prefix="sandbox-tmp-", dir=os.environ.get(STUDENT_DISK_VARIABLE))
+    )
     try:
         yield folder
     finally:

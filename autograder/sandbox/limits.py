@@ -8,10 +8,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["NOBODY", "Limits"]
+__all__ = ["NOBODY", "STUDENT_DISK_VARIABLE", "Limits"]
 
 #: The unprivileged user and group the code runs as unless told.
 NOBODY = 65534
+#: The environment variable that names the folder the student's sandboxes write in, where it is
+#: a file system of that student's own (:mod:`.unit_process`).
+STUDENT_DISK_VARIABLE = "DUCKIE_STUDENT_DISK"
 
 
 @dataclass(frozen=True)
@@ -37,12 +40,16 @@ class Limits:
             loops a student leaves running slow only that student's grading.
         total_memory_bytes: the memory all of one student's sandboxed processes may use
             together (a control group, as ``cpus``).
-        disk_bytes: what one student's grading may write in all: the sandboxes' files, their
-            ``/tmp`` and the grader's own files for that student (a file system of that size,
-            see :mod:`.unit_process`), so one student cannot fill the disk the others are
-            graded on.
+        disk_bytes: what one student's code may write in all while it is graded: the files of
+            all their sandboxes and their ``/tmp`` (a file system of that size, see
+            :mod:`.unit_process`), so one student cannot fill the disk the others, or their
+            own grading, need.
         grader_memory_bytes: the address space of the grader's own process for one student
             (:mod:`.unit_process`).
+        student_seconds: wall time of all of one student's notebooks together (each has its
+            ``submission_seconds`` too): the notebooks after it are not run, said.
+        slow_cell_seconds: a cell outside the tests that takes longer is named in the
+            student's problems (the course's slowest cell takes about 8 s).
     """
 
     cell_seconds: int = 60
@@ -59,3 +66,5 @@ class Limits:
     total_memory_bytes: int = 6 * 1024**3
     disk_bytes: int = 2 * 1024**3
     grader_memory_bytes: int = 4 * 1024**3
+    student_seconds: int = 1800
+    slow_cell_seconds: int = 30

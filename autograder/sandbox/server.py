@@ -77,7 +77,9 @@ class NotebookServer:
             start_new_session=True,
         )
 
-    def run(self, name: str, text: str, tests: Any = None) -> Tuple[Optional[str], str]:
+    def run(
+        self, name: str, text: str, tests: Any = None, seconds: Optional[float] = None
+    ) -> Tuple[Optional[str], str]:
         """Run notebook ``name`` (its folder's name); its executed text, or None and why.
 
         Args:
@@ -89,10 +91,12 @@ class NotebookServer:
                 ``"rerun"``, all of it again, in a new kernel after one died);
                 ``ask(request, until, seconds)`` sends a call to the kernel and returns its
                 answer (a text).
+            seconds: the notebook's wall time (all cells and the kernel's start); its own
+                limit unless told.
         """
         from autograder.calls import Abandon, CallsBroken
 
-        seconds = self.limits.submission_seconds
+        seconds = self.limits.submission_seconds if seconds is None else seconds
         deadline = time.monotonic() + seconds
         if self.process is None:
             self.process = self._start()
@@ -106,7 +110,7 @@ class NotebookServer:
             try:
                 _write_all(process.stdin, wire.encode({"call": call}), deadline)
                 while True:
-                    got = self._reply(min(until, deadline))
+                    got = self._reply(min(until, deadline), deadline)
                     if "answer" in got:
                         return str(got["answer"])
                     if "notebook" in got or "problem" in got:
@@ -156,14 +160,19 @@ class NotebookServer:
         self.stop()
         return why
 
-    def _reply(self, deadline: float) -> Dict[str, Any]:
-        """The sandbox's next message; TimeoutError, EOFError, ValueError or _TooMuch."""
+    def _reply(self, deadline: float, whole: Optional[float] = None) -> Dict[str, Any]:
+        """The sandbox's next message; TimeoutError, EOFError, ValueError or _TooMuch.
+
+        A message that has begun by ``deadline`` is read whole by ``whole`` (the notebook's
+        own deadline): a message left half read would make the next one unreadable.
+        """
         assert self.process is not None
         assert self.process.stdout is not None
-        size = wire.size(_read_exact(self.process.stdout, wire.HEADER, deadline))
+        whole = deadline if whole is None else max(deadline, whole)
+        size = wire.size(_read_exact(self.process.stdout, wire.HEADER, deadline, whole))
         if size > self.limits.output_bytes:
             raise _TooMuch(size)
-        return wire.decode(_read_exact(self.process.stdout, size, deadline))
+        return wire.decode(_read_exact(self.process.stdout, size, whole))
 
     def _last_words(self) -> str:
         if self.errors is None:
@@ -209,12 +218,15 @@ def _write_all(stream: Any, data: bytes, deadline: float) -> None:
             continue
 
 
-def _read_exact(stream: Any, size: int, deadline: float) -> bytes:
-    """Read ``size`` bytes from a pipe before ``deadline``; EOFError if it closes first."""
+def _read_exact(stream: Any, size: int, deadline: float, then: Optional[float] = None) -> bytes:
+    """Read ``size`` bytes from a pipe before ``deadline``; EOFError if it closes first.
+
+    Once the first byte is in, the rest may come until ``then`` (``deadline`` unless told).
+    """
     fd = stream.fileno()
     chunks, got = [], 0
     while got < size:
-        left = deadline - time.monotonic()
+        left = (deadline if not got or then is None else then) - time.monotonic()
         if left <= 0 or not select.select([fd], [], [], left)[0]:
             raise TimeoutError
         chunk = os.read(fd, min(size - got, 1 << 20))

@@ -15,10 +15,11 @@ give each student a user of their own), the process for a student does not keep 
   ``/unit/submission``, and ``/unit/out``, the one folder of the machine it writes to (its
   result). Nothing else: not the repository's ``solutions/``, not the class's results or
   gradebook, not another student's files;
-- everything it and the student's sandboxes write (nbgrader's trees, the notebooks, the
-  missions' bags, the sandboxes' own files and ``/tmp``) lies on a file system of
-  ``Limits.disk_bytes`` of its own (``/unit``, in memory): a student who fills it fills their
-  own grading only, never the disk the class is graded on.
+- everything it writes (nbgrader's trees, the notebooks, the missions' bags) lies on a file
+  system of its own (``/unit``, :data:`GRADER_DISK_BYTES`, in memory), and everything the
+  student's sandboxes write (their folders, their ``/tmp``) on another, of
+  ``Limits.disk_bytes`` (``/unit/student``): a student who fills theirs fills neither the disk
+  the class is graded on nor the grader's files for them, which are graded as usual.
 
 The student's sandboxes then run inside it, as bubblewrap sandboxes without root: a user
 namespace of the same user, in which no further one can be made
@@ -46,11 +47,17 @@ from autograder.sandbox.bubblewrap import (
     joined,
     student_groups,
 )
+from autograder.sandbox.limits import STUDENT_DISK_VARIABLE
 
 __all__ = ["UNIT_INSIDE", "UNIT_MARGIN_S", "apart", "run_unit", "unit_command", "unit_seconds"]
 
 #: Where the grader's process for a student sees its own folder.
 UNIT_INSIDE = "/unit"
+#: The file system the student's sandboxes write in (``Limits.disk_bytes``).
+STUDENT_DISK = f"{UNIT_INSIDE}/student"
+#: The size of the file system of the grader's own files for a student (nbgrader's trees, the
+#: gradebook's copy, the missions' bags): the reference course needs about 60 MB.
+GRADER_DISK_BYTES = 1024**3
 #: The variables of the grader's environment the process for a student keeps (the course's
 #: own switches); every other one is left behind.
 KEPT_PREFIX = "DUCKIE_"
@@ -124,8 +131,9 @@ def unit_command(
         # the kernel allows only where one is already shown whole. Its processes are not this
         # user's to touch.
         "--bind", "/proc", "/proc",
-        "--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", UNIT_INSIDE,
+        "--perms", "1777", "--size", str(GRADER_DISK_BYTES), "--tmpfs", UNIT_INSIDE,
         "--perms", "1777", "--dir", f"{UNIT_INSIDE}/tmp",
+        "--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", STUDENT_DISK,
         "--ro-bind", str(folder / "task.json"), f"{UNIT_INSIDE}/task.json",
         "--ro-bind", str(folder / "submission"), f"{UNIT_INSIDE}/submission",
         "--ro-bind", str(course), f"{UNIT_INSIDE}/course",
@@ -173,6 +181,7 @@ def _environment() -> Dict[str, str]:
         "MKL_NUM_THREADS": "1",
     }
     base.update({key: value for key, value in os.environ.items() if key.startswith(KEPT_PREFIX)})
+    base[STUDENT_DISK_VARIABLE] = STUDENT_DISK
     return base
 
 
@@ -184,9 +193,10 @@ def unit_seconds(task: Dict[str, Any]) -> float:
     """The wall time a student's unit may take: each notebook's limit, the missions', a margin."""
     from autograder.driving import MISSIONS
 
-    limits = task["limits"]
-    driving = len(MISSIONS) * limits["mission_seconds"] if task.get("driving") else 0
-    return len(task["names"]) * limits["submission_seconds"] + driving + UNIT_MARGIN_S
+    limits = Limits(**task["limits"])
+    driving = len(MISSIONS) * limits.mission_seconds if task.get("driving") else 0
+    notebooks = min(len(task["names"]) * limits.submission_seconds, limits.student_seconds)
+    return notebooks + driving + UNIT_MARGIN_S
 
 
 def _pdeathsig() -> None:  # pragma: no cover - runs in the child before exec

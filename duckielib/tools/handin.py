@@ -39,6 +39,9 @@ __all__ = [
     "cell_kind",
     "check_course",
     "check_minutes",
+    "first_line",
+    "one_line",
+    "without_controls",
     "course_notebooks",
     "handin",
     "handin_notebooks",
@@ -58,7 +61,11 @@ NOTEBOOK_SECONDS = 10
 
 #: The longest excerpt of a cell's first line and of an error message kept in a report.
 _EXCERPT, _MESSAGE = 50, 120
-_ANSI = re.compile(r"\x1b\[[0-9;]*[A-Za-z]")
+#: A terminal's control sequences (colours, titles, cursor moves) and other control characters.
+_ANSI = re.compile(
+    r"\x1b\[[0-?]*[ -/]*[@-~]|\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)?|\x1b[()*+].|\x1b.?"
+    r"|[\x00-\x08\x0b-\x1f\x7f-\x9f]"
+)
 
 #: The error a cell that ran out of time shows (nbclient's name for it, as nbgrader's).
 TIMEOUT = "CellTimeoutError"
@@ -313,12 +320,17 @@ def _cut(text: str, limit: int) -> str:
     return text if len(text) <= limit else text[: limit - 1].rstrip() + "…"
 
 
-def _flat(value: object) -> str:
+def without_controls(text: str) -> str:
+    """``text`` without a terminal's control sequences and other control characters."""
+    return _ANSI.sub("", text)
+
+
+def one_line(value: object) -> str:
     """``value`` as text on one line, without terminal colours."""
-    return " ".join(_ANSI.sub("", str(value or "")).split())
+    return " ".join(_ANSI.sub(" ", str(value or "")).split())
 
 
-def _first_line(text: str) -> str:
+def first_line(text: str) -> str:
     """A cell's first line of code (comment lines skipped), shortened."""
     for raw in text.splitlines():
         line = raw.strip()
@@ -329,8 +341,8 @@ def _first_line(text: str) -> str:
 
 def _error(output: Any, cell_seconds: Optional[float]) -> str:
     """``Name: message`` of an error output, on one line, without its traceback."""
-    name = _cut(_flat(output.get("ename")) or "Error", 60)
-    message = _flat(output.get("evalue"))
+    name = _cut(one_line(output.get("ename")) or "Error", 60)
+    message = one_line(output.get("evalue"))
     if not message and name == TIMEOUT and cell_seconds:
         message = f"still running after the {cell_seconds:g} s a cell may take"
     return f"{name}: {_cut(message, _MESSAGE)}" if message else name
@@ -373,7 +385,7 @@ def raised_cells(
                     number=number,
                     kind=kind,
                     grade_id=grade_id if kind != "code" else None,
-                    first_line=_first_line(_source(mine)),
+                    first_line=first_line(_source(mine)),
                     error=_error(errors[-1], cell_seconds),
                 )
             )

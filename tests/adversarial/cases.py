@@ -105,6 +105,7 @@ class Case:
         link: a symbolic link of that name is put in the folder, pointing at the gradebook.
         files: other files put next to the notebook, ``name -> text``.
         blank: the released notebook, every answer left unwritten, instead of the reference.
+        top_files: files put in the student's own folder, beside the assignment folders.
     """
 
     cell: Optional[str] = None
@@ -115,6 +116,7 @@ class Case:
     link: Optional[str] = None
     files: Dict[str, str] = field(default_factory=dict)
     blank: bool = False
+    top_files: Dict[str, str] = field(default_factory=dict)
 
 
 _TRY_READ = """\
@@ -248,6 +250,58 @@ def rotation_matrix(theta):
 """,
 }
 
+# A module beside the student's notebooks that would take the grader over if the grader ran
+# the student's imports: it leaves a mark beside itself and makes every test pass.
+_TAKE_OVER = """\
+import os
+import pathlib
+
+try:
+    pathlib.Path(__file__).with_name("TAKEN_OVER").write_text(str(os.getuid()))
+except OSError:
+    pass
+try:
+    import autograder.verdict
+
+    autograder.verdict.TestRun._run = lambda self, code: None
+except Exception:
+    pass
+"""
+
+# Code that fills every place it may write, until the disk says no.
+_FILL_THE_DISK = """\
+import os
+
+for folder in (".", "/tmp"):
+    written = 0
+    try:
+        with open(os.path.join(folder, "filler.bin"), "wb") as handle:
+            while True:
+                handle.write(bytes(16 * 1024**2))
+                written += 16
+    except OSError as error:
+        print(folder, "full after", written, "MB:", error.strerror)
+"""
+
+# A correct wrap_angle that keeps every angle it is given, and tries to leave each one where
+# the grader reads notes (a path outside the student's folders); the last cell raises with
+# all it kept.
+_RECORDS_ITS_INPUTS = """\
+import math
+
+SEEN = []
+
+
+def wrap_angle(theta):
+    SEEN.append(repr(theta))
+    try:
+        open(f"/etc/seen-{theta!r}", "w")
+    except OSError:
+        pass
+    wrapped = float(theta) % (2 * math.pi)
+    return 0.0 if wrapped >= 2 * math.pi else wrapped
+"""
+
 CASES: Dict[str, Case] = {
     "reference": Case(),
     "infinite_loop": Case(cell="while True:\n    pass\n"),
@@ -312,6 +366,33 @@ CASES: Dict[str, Case] = {
     "l" * 250: Case(),
     "malformed": Case(raw='{"cells": [ this is not a notebook'),
     "empty": Case(empty=True),
+    # Blank answers, and an import of a module beside the notebooks, by the path the grader's
+    # own folder would give it (the grading is started beside submissions/).
+    "imports_beside": Case(
+        blank=True,
+        top_files={"take_over.py": _TAKE_OVER},
+        cell="import take_over\nimport submissions.imports_beside.take_over\n",
+    ),
+    # Names the tests read, rebound in the kernel, with junk answers that count on them.
+    "rebinds_names": Case(
+        cell="from unittest.mock import call as math\nfrom unittest.mock import call as abs\n",
+        after="test_world_from_start",
+        answers={
+            "wrap_angle": "def wrap_angle(theta):\n    return math.isclose(theta, theta)\n",
+            "rotation_matrix": "def rotation_matrix(theta):\n    return abs(theta)\n",
+        },
+    ),
+    "fills_the_disk": Case(cell=_FILL_THE_DISK),
+    # An answer of 48 MB: that test fails, and the grader's memory does not swell.
+    "answers_48mb": Case(
+        answers={"wrap_angle": "def wrap_angle(theta):\n    return 'x' * 48_000_000\n"}
+    ),
+    "records_its_inputs": Case(
+        answers={"wrap_angle": _RECORDS_ITS_INPUTS},
+        cell="raise ValueError('seen: ' + ', '.join(SEEN))\n",
+        after="test_world_from_start",
+    ),
+    "sleeps": Case(cell="import time\n\ntime.sleep(9)\n", after="test_wrap_angle"),
 }
 
 
@@ -327,4 +408,7 @@ def expected_loss(name: str) -> Tuple[str, ...]:
         "peeking": ("test_wrap_angle", "test_rotation_matrix"),
         "malformed": ("*",),
         "empty": ("*",),
+        "imports_beside": ("*",),
+        "rebinds_names": ("test_wrap_angle", "test_rotation_matrix"),
+        "answers_48mb": ("test_wrap_angle",),
     }.get(name, ())

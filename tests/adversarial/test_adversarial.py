@@ -36,6 +36,9 @@ def build(folder, name, case, paths):
     if case.empty:
         (folder / name).mkdir(parents=True)
         return
+    (folder / name).mkdir(parents=True)
+    for file_name, text in case.top_files.items():
+        (folder / name / file_name).write_text(text, encoding="utf-8")
     shutil.copytree(ROOT / "course" / ASSIGNMENT, target, ignore=shutil.ignore_patterns("*.ipynb"))
     path = target / f"{ASSIGNMENT}.ipynb"
     for file_name, text in case.files.items():
@@ -81,14 +84,19 @@ def graded(sandbox, tmp_path_factory):
     ]
     for name, case in CASES.items():
         build(submissions, name, case, paths)
-    results = grade_class(
-        submissions,
-        out,
-        jobs=2,
-        limits=Limits(cell_seconds=seconds(15), submission_seconds=seconds(90), processes=64),
-        names=[ASSIGNMENT],
-        driving=False,
+    limits = Limits(
+        cell_seconds=seconds(15),
+        submission_seconds=seconds(90),
+        processes=64,
+        disk_bytes=256 * 1024**2,
+        slow_cell_seconds=8,
     )
+    # Started beside submissions/, as the README's command is.
+    with pytest.MonkeyPatch.context() as patch:
+        patch.chdir(root)
+        results = grade_class(
+            submissions, out, jobs=2, limits=limits, names=[ASSIGNMENT], driving=False
+        )
     # By folder name as written (a folder nbgrader cannot take as an id is graded under another).
     return {result.shown: result for result in results}, out, paths
 
@@ -294,3 +302,76 @@ def test_busy_loops_left_running_are_stopped_and_said(graded):
         "03_frames: the notebook left 8 processes running after its last cell; the grader "
         "stopped them"
     ]
+
+
+def test_no_line_of_the_submission_runs_in_the_grader(graded):
+    # The grader built the tests' namespace from the course alone: the module beside the
+    # notebooks, imported by a cell, ran only in the sandbox (where it is not even there).
+    results, out, _ = graded
+    result = results["imports_beside"]
+    assert result.total == 0
+    assert not list(out.parent.rglob("TAKEN_OVER"))
+    (raised,) = [problem for problem in result.problems if "outside the tests raised" in problem]
+    assert "ModuleNotFoundError: No module named 'take_over'" in raised
+
+
+def test_names_the_tests_read_stay_the_graders(graded):
+    # math and abs rebound in the kernel change nothing of the tests' own math and abs: the
+    # junk answers fail (test_each_case_... holds which), the others keep their points.
+    results, _, _ = graded
+    result = results["rebinds_names"]
+    assert result.total == FULL_MARKS - 4
+    # The kernel's own math is put back before the hidden tests call the student's code.
+    assert any("replaced the name math" in problem for problem in result.problems)
+
+
+def test_a_student_who_fills_the_disk_fills_only_their_own(graded):
+    results, out, _ = graded
+    result = results["fills_the_disk"]
+    assert result.total == FULL_MARKS
+    assert result.complete
+    printed = "".join(o.get("text", "") for o in _outputs(out, "fills_the_disk"))
+    assert printed.count("No space left on device") == 2, printed
+    assert "The notebooks filled the 268 MB the grader gives a student's files" in " ".join(
+        result.problems
+    )
+    assert results["reference"].problems == []
+
+
+def test_an_answer_too_long_fails_its_test_and_leaves_the_graders_memory_alone(graded):
+    results, _, _ = graded
+    result = results["answers_48mb"]
+    message = result.messages[(ASSIGNMENT, "test_wrap_angle")]
+    assert "48.0 MB of data" in message, message
+    assert "at most 4.2 MB" in message, message
+    assert result.complete
+    # Its other tests keep their points (the notebook's own cells that use the answer may fail).
+    assert result.total == FULL_MARKS - 2
+    grown = result.timings["grader_memory_mb"] - results["reference"].timings["grader_memory_mb"]
+    assert grown < 100, grown
+
+
+def test_a_hidden_input_never_comes_back_in_a_later_cell(graded):
+    # The student's wrap_angle keeps every angle it is given; the last cell raises with them,
+    # and the answer tried to leave each one in a path the grader notes. The hidden tests ran
+    # after that cell: only the visible tests' inputs could come back.
+    results, out, _ = graded
+    result = results["records_its_inputs"]
+    assert result.total == FULL_MARKS
+    said = " ".join(result.problems)
+    for visible in ("0.5", "3.0", "-1.0", "7.283185307179586"):
+        assert visible in said, said
+    assert "/etc/seen-0.5" in said
+    page = (out / "feedback" / "records_its_inputs.html").read_text()
+    table = (out / "grades.csv").read_text()
+    for hidden in ("100.0", "1000000.0", "44.23318530717959", "1e-300", "-1e-17", "6282.18"):
+        for text in (said, page, table):
+            assert hidden not in text, hidden
+
+
+def test_slow_cells_are_named(graded):
+    results, _, _ = graded
+    (slow,) = [p for p in results["sleeps"].problems if "took over" in p]
+    assert slow.startswith("03_frames: 1 cell took over 8 s: cell ")
+    assert "(import time): 9 s." in slow
+    assert results["sleeps"].total == FULL_MARKS

@@ -18,6 +18,9 @@ Each student hands in the whole course. What each does, and what an instructor w
 - ``hangs_on_import``: an exported constant whose value takes for ever: the driving run is
   stopped by its wall clock, said in ``problems``; the tests keep their points.
 - ``prints_20mb``: a cell that prints 20 MB: the stored notebook keeps 2 MB, said.
+- ``nests_a_frame``: a mission node that writes, on the nodes' end of the link to the robot, a
+  frame whose header nests 200,000 lists deep: the robot refuses it without recursing, the
+  missions stop with a sentence, and the student is graded as usual.
 """
 
 from __future__ import annotations
@@ -53,6 +56,21 @@ print(sorted(os.listdir(".")))
 """
 
 
+NESTS_A_FRAME = """\
+def mission_node(mission):
+    import os
+    import socket
+    import struct
+    import sys
+
+    rospy.init_node("mission_node")
+    link = socket.socket(fileno=os.dup(int(sys.argv[sys.argv.index("--link-fd") + 1])))
+    head = b"[" * 200_000
+    link.sendall(struct.pack("!II", len(head), 0) + head)
+    rospy.sleep(1.0)
+"""
+
+
 def _append(folder, name, source, export=False):
     """Add a code cell at the end of the student's notebook ``name``."""
     path = folder / name / f"{name}.ipynb"
@@ -76,6 +94,7 @@ def graded(sandbox, tmp_path_factory):
         "forges_the_drive",
         "hangs_on_import",
         "prints_20mb",
+        "nests_a_frame",
     ):
         shutil.copytree(filled, submissions / student)
     shutil.copytree(ROOT / "course", submissions / "link_farm")
@@ -96,6 +115,7 @@ def graded(sandbox, tmp_path_factory):
         export=True,
     )
     _append(submissions / "prints_20mb", "03_frames", "print('x' * 20_000_000)\n")
+    _append(submissions / "nests_a_frame", "09_mission", NESTS_A_FRAME, export=True)
     results = grade_class(
         submissions,
         out,
@@ -120,7 +140,7 @@ def test_the_reference_student_is_graded_as_if_alone(graded):
     assert reference.problems == []
     assert reference.total == reference.max_total > 0
     assert reference.driving_score == 100, _reasons(reference)
-    assert len(results) == 7
+    assert len(results) == 8
 
 
 def test_links_to_the_solutions_made_during_the_run_are_never_read(graded):
@@ -191,3 +211,15 @@ def test_a_huge_print_is_cut_in_the_stored_notebook_and_said(graded):
     assert problem.endswith(" showed 20.0 MB of output; the stored notebook keeps the first 2.0 MB")
     stored = out / "work" / "autograded" / "prints_20mb" / "03_frames" / "03_frames.ipynb"
     assert stored.stat().st_size < 3_000_000
+
+
+def test_a_frame_that_nests_too_deeply_stops_the_missions_not_the_grading(graded):
+    results, _ = graded
+    nested = results["nests_a_frame"]
+    assert nested.complete
+    assert _lost(nested) == []
+    assert not [problem for problem in nested.problems if problem.startswith("Not graded")]
+    for driving in nested.missions.values():
+        assert any("nests more than 32 levels deep" in reason for reason in driving.reasons), (
+            driving.reasons
+        )
