@@ -18,6 +18,7 @@ import argparse
 import contextlib
 import functools
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -129,7 +130,10 @@ def local_launcher(solution: Optional[Union[str, os.PathLike]]) -> Launcher:
     def start(sock: socket.socket, arguments: List[str]) -> Iterator[Any]:
         fd = sock.fileno()
         command = nodes_command(fd, given, arguments)
-        process = subprocess.Popen(command, pass_fds=(fd,), stdout=subprocess.DEVNULL)
+        # A group of its own: what a node forked (a busy loop in a child) ends with the run.
+        process = subprocess.Popen(
+            command, pass_fds=(fd,), stdout=subprocess.DEVNULL, start_new_session=True
+        )
         try:
             yield process
         finally:
@@ -138,6 +142,8 @@ def local_launcher(solution: Optional[Union[str, os.PathLike]]) -> Launcher:
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
+            with contextlib.suppress(ProcessLookupError, PermissionError):
+                os.killpg(process.pid, signal.SIGKILL)
 
     return start
 

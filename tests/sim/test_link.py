@@ -10,6 +10,7 @@ from __future__ import annotations
 import socket
 import struct
 import threading
+from pathlib import Path
 
 import pytest
 
@@ -131,6 +132,8 @@ def test_what_the_nodes_publish_on_the_robots_outputs_stays_with_them():
         (struct.pack("!II", 10, 0) + b"not json!!", "not JSON"),
         (struct.pack("!II", 2**30, 0), "over the limit"),
         (b"\x00\x00", "closed the link"),
+        # Read without recursing: a JSON reader would stop on its recursion limit.
+        (struct.pack("!II", 200_000, 0) + b"[" * 200_000, "nests more than 32 levels deep"),
     ],
 )
 def test_a_broken_frame_ends_the_run_with_a_sentence(frame, said):
@@ -247,6 +250,50 @@ def test_a_run_apart_records_what_one_process_records(tmp_path, monkeypatch):
     text = apart["log"].read_text()
     assert "[/duckiebot/led_emitter_node]: Pattern changed to RED." in text
     assert "[/duckiebot/mission_node]: state clockwise" in text
+
+
+FORKS_A_BUSY_CHILD = """
+
+_mission_node = mission_node
+
+
+def mission_node(mission):
+    import os
+
+    child = os.fork()
+    if child == 0:
+        while True:
+            pass
+    with open(os.environ["CHILD_FILE"], "w") as noted:
+        noted.write(str(child))
+    _mission_node(mission)
+"""
+
+
+def test_what_a_node_forked_ends_with_a_run_apart(tmp_path, monkeypatch):
+    import time
+
+    from duckielib.config import PROJECT_ROOT
+    from duckielib.solution.export import export_solution
+
+    solution = tmp_path / "solution.py"
+    solution.write_text(export_solution(PROJECT_ROOT / "solutions").source + FORKS_A_BUSY_CHILD)
+    monkeypatch.setenv("CHILD_FILE", str(tmp_path / "child"))
+    run = run_apart(solution, mission="straight", out=tmp_path / "run", animation=False)
+    assert run.report.finished
+    child = int((tmp_path / "child").read_text())
+    deadline = time.monotonic() + 5
+    while _state(child) not in ("gone", "Z") and time.monotonic() < deadline:
+        time.sleep(0.05)  # killed at the run's end; reaped by whoever adopted it
+    assert _state(child) in ("gone", "Z"), f"the node's busy child {child} still runs"
+
+
+def _state(pid):
+    """A process's state letter (``Z``: ended, not yet reaped), or ``"gone"``."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return "gone"
 
 
 def test_duckie_mission_apart_drives_the_reference_as_one_process_does(tmp_path):
