@@ -29,6 +29,7 @@ import heapq
 import itertools
 import sys
 import threading
+from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, TextIO, Tuple
 
 from duckielib.errors import DuckielibError
@@ -66,6 +67,14 @@ class NodeCrashed(DuckielibError):
 
 #: How many real seconds a node's code may run without calling rospy, unless a graph says.
 STALL_LIMIT_S = 10.0
+
+
+@dataclass(frozen=True)
+class _Callback:
+    """A subscription's callback that runs, for the watchdog (:meth:`Graph.run_callback`)."""
+
+    name: str
+    topic: str
 
 
 class Graph(ParameterServer):
@@ -463,8 +472,37 @@ class Graph(ParameterServer):
         actor.predicate = None
         return predicate()
 
-    def stall_message(self, actor: Actor) -> str:
+    def run_callback(self, node: Node, topic: str, call: Callable[[], None]) -> bool:
+        """Run a subscription's callback, watched as a node's main code is (a stall stops it).
+
+        A callback runs in the thread that drives the graph, between events: one that computes
+        for ``stall_limit`` real seconds without calling rospy is stopped, and the run with it
+        (:class:`~duckielib.ros.exceptions.NodeCrashed`, saying which callback).
+
+        Returns:
+            Whether the callback ran to its end (False: it was stopped).
+        """
+        watched = _Callback(node.name, topic)
+        watchdog.hold(self, watched, threading.get_ident())
+        try:
+            call()
+        except Stalled:
+            if self._crash is None:
+                self._crash = (node.name, Stalled(self.stall_message(watched)))
+            return False
+        finally:
+            watchdog.release(self)
+        return True
+
+    def stall_message(self, actor: Any) -> str:
         """Why the graph stopped ``actor``'s code: it ran too long without waiting."""
+        if isinstance(actor, _Callback):
+            return (
+                f"its callback on {actor.topic} ran for {self.stall_limit:g} s of real time "
+                "without calling rospy, and simulated time cannot move while a node's code "
+                "runs: no message can arrive while the callback waits. Do the work and return; "
+                "keep what the next callback needs in a variable"
+            )
         return (
             f"its code ran for {self.stall_limit:g} s of real time without calling rospy, and "
             "simulated time cannot move while a node's code runs: a loop that waits for a "

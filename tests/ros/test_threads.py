@@ -253,6 +253,45 @@ def test_a_loop_that_never_waits_is_stopped_with_a_sentence():
     graph.shutdown()
 
 
+def test_a_callback_that_never_returns_is_stopped_with_a_sentence():
+    # A callback runs between the graph's events: while it computes, no time passes and no
+    # message arrives. One that never returns is stopped, and the run with it, saying which.
+    graph = quiet_graph(stall_limit=0.5)
+    seen = []
+
+    def talker():
+        rospy.init_node("talker")
+        publisher = rospy.Publisher("chatter", String, queue_size=1)
+        rospy.sleep(0.5)
+        publisher.publish(String(data="first"))
+        rospy.sleep(1.0)
+
+    def listener():
+        rospy.init_node("listener")
+
+        def busy(message):
+            seen.append(message.data)
+            while True:
+                pass
+
+        rospy.Subscriber("chatter", String, busy)
+        rospy.spin()
+
+    graph.launch(talker)
+    graph.launch(listener)
+    started = time.monotonic()
+    with pytest.raises(NodeCrashed) as caught:
+        graph.run(5.0)
+    assert time.monotonic() - started < 5.0
+    assert seen == ["first"]
+    assert str(caught.value).startswith(
+        "Node /listener stopped: its callback on /chatter ran for 0.5 s of real time without "
+        "calling rospy"
+    )
+    assert [line.node for line in graph.log if line.level == ERROR] == ["/listener"]
+    graph.shutdown()
+
+
 def test_code_that_waits_is_never_stopped_however_long_it_runs():
     graph = quiet_graph(stall_limit=0.3)
 

@@ -6,6 +6,7 @@ Pure: standard library only, Python 3.8 (deployed to the robot).
 from __future__ import annotations
 
 import collections
+import functools
 import io
 from typing import Any, Callable, Deque, Dict, List, Optional, Tuple, Type, Union, cast
 
@@ -389,10 +390,10 @@ class Subscriber:
                 continue
             stack.append(self._node)  # the callback runs as its node
             try:
-                if self.callback_args is None:
-                    self.callback(message)
-                else:
-                    self.callback(message, self.callback_args)
+                extra = () if self.callback_args is None else (self.callback_args,)
+                call = functools.partial(self.callback, message, *extra)
+                if not self._node.graph.run_callback(self._node, self.name, call):
+                    return  # stopped: the run ends, saying why
             except Exception as error:
                 self._node.log(ERROR, f"bad callback on {self.name}:\n{format_error(error)}")
             finally:
