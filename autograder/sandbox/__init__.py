@@ -18,7 +18,6 @@ from autograder.sandbox.bubblewrap import (
     SandboxError,
     SandboxUnavailable,
     Started,
-    check_sandbox,
     end_student_groups,
     joined,
     run,
@@ -27,6 +26,7 @@ from autograder.sandbox.bubblewrap import (
     student_groups,
     unit_user,
 )
+from autograder.sandbox.unit_process import check_sandbox
 
 __all__ = [
     "COURSE",

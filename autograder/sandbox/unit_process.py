@@ -42,14 +42,26 @@ from typing import Any, Dict, List, Optional
 from autograder.sandbox.bubblewrap import (
     GRADER_TASKS,
     Limits,
+    SandboxUnavailable,
     _parents,
     _readonly_paths,
     joined,
     student_groups,
+    unit_user,
 )
+from autograder.sandbox.bubblewrap import check_sandbox as _check_the_sandbox
+from autograder.sandbox.groups import end_student_groups
 from autograder.sandbox.limits import STUDENT_DISK_VARIABLE
 
-__all__ = ["UNIT_INSIDE", "UNIT_MARGIN_S", "apart", "run_unit", "unit_command", "unit_seconds"]
+__all__ = [
+    "UNIT_INSIDE",
+    "UNIT_MARGIN_S",
+    "apart",
+    "check_sandbox",
+    "run_unit",
+    "unit_command",
+    "unit_seconds",
+]
 
 #: Where the grader's process for a student sees its own folder.
 UNIT_INSIDE = "/unit"
@@ -163,6 +175,57 @@ def unit_command(
     return joined(student_groups(unit_limits(limits)), args)
 
 
+#: Run as the grader's process for a student: a sandbox inside it, which prints its user.
+_CHAIN_PROBE = """
+import sys
+from pathlib import Path
+from autograder.sandbox.bubblewrap import sandboxed_command
+from autograder.sandbox.limits import Limits
+import subprocess
+probe = [sys.executable, "-c", "import os; print(os.getuid())"]
+command = sandboxed_command(probe, Path("/unit/student"), Limits())
+done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+print(done.stdout.strip() or (done.stderr.strip().splitlines() or ["no message"])[-1])
+"""
+
+
+def check_sandbox() -> None:
+    """Make sure the sandbox, and the grader's process for a student around it, can run here.
+
+    Raises:
+        SandboxUnavailable: saying what is missing and what to do.
+    """
+    _check_the_sandbox()
+    if os.geteuid() != 0:
+        return
+    uid = unit_user()
+    with tempfile.TemporaryDirectory(prefix="duckie-check-") as scratch:
+        base = Path(scratch)
+        for name in ("submission", "out", "course"):
+            (base / name).mkdir()
+        (base / "task.json").write_text("{}", encoding="utf-8")
+        os.chown(base / "out", uid, uid)
+        limits = dataclasses.replace(Limits(), uid=uid)
+        command = unit_command(
+            [sys.executable, "-I", "-c", _CHAIN_PROBE], base, base / "course", limits, uid
+        )
+        try:
+            done = subprocess.run(command, capture_output=True, text=True, timeout=120, check=False)
+        except (OSError, subprocess.TimeoutExpired) as error:
+            done = subprocess.CompletedProcess(command, 1, "", str(error))
+        finally:
+            end_student_groups(uid)
+    if done.stdout.strip() != str(uid):
+        said = (done.stdout.strip() or done.stderr.strip() or "no message").splitlines()[-1]
+        raise SandboxUnavailable(
+            "The grader's process for a student could not start its sandbox here: "
+            f"{said[:300]} (it runs as an unprivileged user and needs unprivileged user "
+            "namespaces: sysctl user.max_user_namespaces above 0, and on Ubuntu "
+            "kernel.apparmor_restrict_unprivileged_userns=0 or an AppArmor profile that "
+            "lets bwrap make them)."
+        )
+
+
 def _environment() -> Dict[str, str]:
     """The environment of the process for a student: its own, and the course's switches."""
     base = {
@@ -223,8 +286,6 @@ def run_unit(
         :func:`autograder.results.to_data` writes it; when the unit itself stopped (its time
         limit, a crash), a result with ``complete`` false and a sentence saying why.
     """
-    from autograder.sandbox import end_student_groups, unit_user
-
     seconds = unit_seconds(task)
     # The student's user id, chosen here: whatever ends the unit, its control groups go with it.
     uid = unit_user()

@@ -48,6 +48,9 @@ KERNEL_MODULE = "__duckie_calls__"
 CALLS_FILE = Path(__file__).resolve().parents[2] / "calls.py"
 #: The most output one cell keeps, in characters (a picture's data counts too).
 OUTPUT_LIMIT = 2_000_000
+#: How long a cell's outputs may keep arriving after the kernel said the cell ended, in
+#: seconds (nbclient's default is 4: a cell that shows thousands of pictures needs longer).
+IOPUB_SECONDS = 30
 #: The error a cell that ran out of time is given (as nbgrader gives it).
 TIMEOUT_ERROR = {
     "ename": "CellTimeoutError",
@@ -432,9 +435,25 @@ def execute_notebook(
             "(os._exit, a crash, or more memory than the limit).",
         )
     except Exception as error:  # the grader reports it with the notebook
-        problems.append(f"the notebook stopped running: {type(error).__name__}: {error}")
-        mark_not_run(notebook, f"This cell did not run: {type(error).__name__}: {error}")
+        said = _stopped_by(error, notebook, executor.current)
+        problems.append(f"the notebook stopped running: {said}")
+        mark_not_run(notebook, f"This cell did not run: {said}")
     _note_problems(notebook, executor, problems)
+
+
+def _stopped_by(error: Exception, notebook: Any, index: int) -> str:
+    """Why the run stopped at cell ``index``, in a sentence."""
+    from nbclient.exceptions import CellTimeoutError
+
+    if isinstance(error, CellTimeoutError) and "IOPub" in str(error):
+        lines = [line.strip() for line in notebook.cells[index].source.splitlines()]
+        first = next((line for line in lines if line and not line.startswith("#")), "")
+        return (
+            f"the outputs of cell {index + 1} ({first[:50]}) were still arriving "
+            f"{IOPUB_SECONDS} s after the cell ended (thousands of outputs, or a kernel too "
+            "busy to send them); the cells after it did not run"
+        )
+    return f"{type(error).__name__}: {error}"
 
 
 def _note_problems(notebook: Any, executor: Any, problems: List[str]) -> None:
@@ -474,6 +493,7 @@ def _client(
         allow_errors=True,
         interrupt_on_timeout=True,
         raise_on_iopub_timeout=True,
+        iopub_timeout=IOPUB_SECONDS,
         error_on_timeout=TIMEOUT_ERROR,
         extra_arguments=["--HistoryManager.hist_file=:memory:"],
         shutdown_kernel="immediate",
