@@ -67,7 +67,7 @@ def failure_messages(notebook_path: Path) -> Dict[str, str]:
                 text = (
                     "A function this test calls is not written yet (it raises NotImplementedError)."
                 )
-            elif name in ("AssertionError", "NotRun") and value:
+            elif name in ("AssertionError", "NotRun", "RuleBroken") and value:
                 text = value
             else:
                 text = f"{name}: {value}" if value else name

@@ -60,10 +60,10 @@ from autograder.driving import MAX_SCORE, MISSIONS
 from autograder.feedback import write_feedback
 from autograder.files import Collected, UnsafeFile, collect_folder, unpack_zip
 from autograder.formgrade import for_formgrader, rubrics
+from autograder.launch import run_unit
+from autograder.notebook_problems import raised_outside_tests
 from autograder.results import StudentResult, from_data, not_graded, to_data, write_atomic
 from autograder.sandbox import Limits
-from autograder.sandbox.unit_process import run_unit
-from autograder.unit import raised_outside_tests
 from duckielib.solution.cascade import Dependencies
 
 __all__ = [

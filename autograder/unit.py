@@ -4,8 +4,8 @@ Whatever one student's files do to the grader (a notebook nbgrader cannot handle
 crash, all memory), it happens in this unit's process and stops there: the class's other
 students, and the results already written, are not touched. A unit runs on any worker of the
 class's Dask cluster (:mod:`autograder.grade`), which starts ``python -I -m autograder.unit
-FOLDER`` (:func:`autograder.sandbox.unit_process.run_unit`: unprivileged, on a file system of
-the student's own, where the grader runs as root); this module is that process.
+FOLDER`` (:func:`autograder.launch.run_unit`: unprivileged, on a file system of the student's
+own, where the grader runs as root); this module is that process.
 
 Inside, nbgrader works as it does for a class, on a gradebook of this unit's own (a copy of the
 class's, which holds the hidden tests): the student's notebooks are repaired against the release
@@ -30,7 +30,9 @@ import traceback
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Tuple
 
-__all__ = ["GraderFailed", "main", "raised_outside_tests"]
+from autograder.notebook_problems import cell_seconds, cells_that_stopped, disk_full, slow_cells
+
+__all__ = ["GraderFailed", "main"]
 
 #: What of a student's files the notebook's folder gets: not notebooks (the repaired one is
 #: written there), not hidden files, not Python modules (a ``numpy.py`` next to the notebook
@@ -54,7 +56,7 @@ def _sandboxed_execute_class(unit: _Unit):
             name = resources["nbgrader"]["assignment"]
             began = time.monotonic()
             sent, tests = _remote_tests(nb)
-            run = _TestsHere(unit, nb.cells, tests, _course_cells(unit, name))
+            run = _TestsHere(unit, nb.cells, tests, _course_cells(unit, name), name)
             left = unit.limits.student_seconds - unit.timings["notebooks"]
             if left < 1:
                 why = (
@@ -99,11 +101,11 @@ def _sandboxed_execute_class(unit: _Unit):
                 mark_not_run(nb, f"This cell did not run: the notebook {problem}.")
                 unit.problems.append(f"{name}: the notebook {problem}.")
                 return nb, resources
-            unit.timings["cells"] += _cell_seconds(executed)
+            unit.timings["cells"] += cell_seconds(executed)
             found = executed.metadata.pop(METADATA_KEY, {}).get("problems", [])
             unit.problems.extend(f"{name}: {problem}" for problem in found)
-            unit.problems.extend(_cells_that_stopped(name, nb, executed, unit.limits.cell_seconds))
-            unit.problems.extend(_slow_cells(name, nb, executed, unit.limits.slow_cell_seconds))
+            unit.problems.extend(cells_that_stopped(name, nb, executed, unit.limits.cell_seconds))
+            unit.problems.extend(slow_cells(name, nb, executed, unit.limits.slow_cell_seconds))
             return executed, resources
 
     return SandboxedExecute
@@ -166,7 +168,12 @@ class _TestsHere:
     """
 
     def __init__(
-        self, unit: Any, cells: List[Any], tests: Dict[int, str], course: List[Any]
+        self,
+        unit: Any,
+        cells: List[Any],
+        tests: Dict[int, str],
+        course: List[Any],
+        name: str,
     ) -> None:
         from autograder.calls import Link
         from autograder.sandbox.server import SHARED_INSIDE
@@ -176,6 +183,7 @@ class _TestsHere:
         self.sources = {grade_id: cells[index].source for index, grade_id in tests.items()}
         self.space: Dict[str, Any] = prelude(course)
         self.answers = answer_names(course)
+        self.broken = _broken_rules(unit, cells, course, name)
         self.runs: Dict[str, Any] = {}
         paths = {str(unit.shared): SHARED_INSIDE} if unit.use_sandbox else {}
         self.link = Link(self._send, paths)
@@ -222,6 +230,10 @@ class _TestsHere:
             else:
                 run = TestRun(self.sources[grade_id], grade_id, self.space, self.answers)
                 self.runs[grade_id] = run
+                broken = [self.broken[name] for name in run.asked() if name in self.broken]
+                if broken:  # the answer breaks the notebook's rules: the test fails, unasked
+                    run.refuse(" ".join(broken))
+                    return
                 run.run_visible(self.link)
                 if kind == "rerun":
                     run.run_hidden()
@@ -232,66 +244,22 @@ class _TestsHere:
         self.unit.timings["largest_answer"] = largest
 
 
-def raised_outside_tests(
-    assignment: str, sent: Any, executed: Any, cell_seconds: Optional[int] = None
-) -> Optional[str]:
-    """One sentence naming every cell outside the test cells that raised, or None if none did.
+def _broken_rules(unit: Any, cells: List[Any], course: List[Any], name: str) -> Dict[str, str]:
+    """The notebook's graded names whose answers break its rules (:mod:`autograder.rules`).
 
-    Which cells are tests, where each cell is and what it says come from ``sent``: the notebook
-    this process handed to the run, rebuilt on the release's instructor cells
-    (:func:`autograder.tamper.repair`, then nbgrader's own restoring from the gradebook), so a
-    student cannot turn a cell into a test or out of one. Only the error outputs are read from
-    ``executed``, what came back from the run, and only as text. Cells that never ran because
-    the kernel died (the ``NotRun`` error of
-    :func:`autograder.sandbox.inside.notebook.mark_not_run`) are left out: the kernel's death is
-    a problem of its own.
-
-    Args:
-        assignment: the assignment's name, which starts the sentence.
-        sent: the notebook as sent to be run.
-        executed: the same notebook as it came back, with its outputs.
-        cell_seconds: the time limit of a cell, quoted for a cell that ran out of it.
+    The rules are read from the code, never by running it. If the reading fails (the grader's
+    fault, not the student's), no rule is held against the notebook, and that is said.
     """
-    from autograder.sandbox.inside.notebook import NOT_RUN
-    from duckielib.tools.handin import raised_cells
+    from autograder.rules import broken_rules
 
-    raised = [
-        cell
-        for cell in raised_cells(sent.cells, executed.cells, cell_seconds, skip=(NOT_RUN,))
-        if not sent.cells[cell.number - 1].get("metadata", {}).get("nbgrader", {}).get("grade")
-    ]
-    if not raised:
-        return None
-    cells = "1 cell" if len(raised) == 1 else f"{len(raised)} cells"
-    found = "; ".join(cell.describe() for cell in raised)
-    return f"{assignment}: {cells} outside the tests raised: {found}"
-
-
-def _cells_that_stopped(name: str, sent: Any, executed: Any, cell_seconds: int) -> List[str]:
-    """Sentences for the cells outside the tests that raised, and the tests that ran out of time."""
-    from duckielib.tools.handin import raised_cells
-
-    said = []
-    raised = raised_outside_tests(name, sent, executed, cell_seconds)
-    if raised is not None:
-        said.append(raised)
-    tests = {
-        index
-        for index, cell in enumerate(sent.cells)
-        if cell.get("metadata", {}).get("nbgrader", {}).get("grade")
-    }
-    late = [
-        cell
-        for cell in raised_cells(sent.cells, executed.cells, cell_seconds)
-        if cell.number - 1 in tests
-        and cell.error.startswith(("CellTimeoutError", "KeyboardInterrupt"))
-    ]
-    if late:
-        names = ", ".join(cell.grade_id or f"cell {cell.number}" for cell in late)
-        said.append(
-            f"{name}: {names} ran out of the {cell_seconds} s a cell may take and scored zero."
+    try:
+        return broken_rules(cells, course, name)
+    except Exception as error:
+        unit.problems.append(
+            f"{name}: the grader could not read the notebook's code to check its rules "
+            f"({type(error).__name__}); no rule was held against it."
         )
-    return said
+        return {}
 
 
 @dataclasses.dataclass
@@ -389,7 +357,7 @@ class _Unit:
 
     def _disk_full(self) -> None:
         """Say it when the student's code filled the file system it writes on."""
-        size = _full(self.student_disk) if self.student_disk != self.folder else None
+        size = disk_full(self.student_disk) if self.student_disk != self.folder else None
         if size is not None:
             self.problems.append(
                 f"The notebooks filled the {size} the grader gives a student's files: what they "
@@ -455,65 +423,6 @@ class _Unit:
                 missions=missions, timings=self.timings, to_grade=to_grade,
             )
         )  # fmt: skip
-
-
-def _full(folder: Path) -> Optional[str]:
-    """How big ``folder``'s file system is, as a sentence's words, if it is full (or nearly)."""
-    try:
-        stats = os.statvfs(folder)
-    except OSError:
-        return None
-    if stats.f_bavail * stats.f_frsize > 1024**2:
-        return None
-    return f"{stats.f_blocks * stats.f_frsize / 1e6:.0f} MB"
-
-
-def _cell_seconds(notebook: Any) -> float:
-    """How long a run notebook's cells took, by the times its kernel recorded."""
-    return sum(_seconds_of(cell) for cell in notebook.cells)
-
-
-def _seconds_of(cell: Any) -> float:
-    """How long one run cell took, by the times its kernel recorded (0 when it does not say)."""
-    from datetime import datetime
-
-    times = cell.get("metadata", {}).get("execution", {})
-    try:
-        start = datetime.fromisoformat(times["iopub.execute_input"].replace("Z", "+00:00"))
-        end = datetime.fromisoformat(times["shell.execute_reply"].replace("Z", "+00:00"))
-    except (KeyError, TypeError, ValueError, AttributeError):
-        return 0.0
-    return max(0.0, (end - start).total_seconds())
-
-
-def _slow_cells(name: str, sent: Any, executed: Any, seconds: int) -> List[str]:
-    """One sentence naming the cells outside the tests that took more than ``seconds`` each.
-
-    The times are the kernel's own; the cells are named by position and first line as the
-    grader sent them (see :func:`raised_outside_tests`).
-    """
-    from duckielib.tools.handin import first_line
-
-    slow = [
-        (number, _seconds_of(cell))
-        for number, cell in enumerate(executed.cells, start=1)
-        if cell.cell_type == "code" and not _is_test(sent.cells[number - 1])
-    ]
-    slow = [(number, took) for number, took in slow if took > seconds]
-    if not slow:
-        return []
-    total = sum(took for _, took in slow)
-    shown = ", ".join(
-        f"cell {number} ({first_line(sent.cells[number - 1].source)}): {took:.0f} s"
-        for number, took in slow[:5]
-    )
-    more = f" and {len(slow) - 5} more" if len(slow) > 5 else ""
-    if len(slow) == 1:
-        return [f"{name}: 1 cell took over {seconds} s: {shown}."]
-    return [
-        f"{name}: {len(slow)} cells took over {seconds} s each, {total:.0f} s in all: "
-        f"{shown}{more}."
-    ]
 
 
 def _without(text: str, folder: Path) -> str:

@@ -203,16 +203,28 @@ class TestRun:
         """Whether the hidden part is still to run."""
         return bool(self.hidden) and not (self.failed or self.finished) and self.cell is not None
 
+    def asked(self) -> List[str]:
+        """The names the test asks of the kernel: the student's it reads."""
+        return [
+            name
+            for name in free_names(self.source)
+            if name not in self.space and (self.answers is None or name in self.answers)
+        ]
+
+    def refuse(self, why: str) -> None:
+        """Fail the test without running it: the student's answer breaks a rule (said)."""
+        self.cell = dict(self.space)
+        self.failed = True
+        self.outputs.append(
+            {"output_type": "error", "ename": "RuleBroken", "evalue": why, "traceback": [why]}
+        )
+
     def run_visible(self, link: Link) -> None:
         """Fetch the student's names the whole test needs, then run the visible part."""
         import contextlib
 
         self.cell = dict(self.space)
-        names = [
-            name
-            for name in free_names(self.source)
-            if name not in self.space and (self.answers is None or name in self.answers)
-        ]
+        names = self.asked()
         try:
             for name in names:
                 # Without it, the test raises NameError where it uses the name, as in a kernel.

@@ -126,13 +126,6 @@ def _as_samples(tracks: Tracks) -> List[_Samples]:
     return checked
 
 
-def _wrap(theta: np.ndarray) -> np.ndarray:
-    """Angles in radians wrapped into [0, 2*pi), same shape."""
-    wrapped = np.mod(theta, _TWO_PI)
-    # A tiny negative angle wraps to 2*pi - tiny, which rounds to 2*pi itself.
-    return np.where(wrapped >= _TWO_PI, 0.0, wrapped)
-
-
 def _break_at_wraps(t: np.ndarray, theta: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     """Wrapped theta with a NaN between samples where it jumps by more than pi.
 
@@ -144,7 +137,9 @@ def _break_at_wraps(t: np.ndarray, theta: np.ndarray) -> Tuple[np.ndarray, np.nd
         Times and wrapped headings, shape (N + K,) for K jumps; each NaN sits at the midpoint
         time between the two samples around the jump, so that matplotlib breaks the line there.
     """
-    wrapped = _wrap(theta)
+    wrapped = np.mod(theta, _TWO_PI)
+    # A tiny negative angle wraps to 2*pi - tiny, which rounds to 2*pi itself: that is 0.
+    wrapped[wrapped >= _TWO_PI] = 0.0
     jumps = np.flatnonzero(np.abs(np.diff(wrapped)) > math.pi) + 1
     times = np.insert(t, jumps, (t[jumps - 1] + t[jumps]) / 2)
     return times, np.insert(wrapped, jumps, np.nan)

@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, List, Optional, Sequence, Tuple
 import numpy as np
 from matplotlib import animation, patches
 from matplotlib import pyplot as plt
+from matplotlib.transforms import Affine2D
 
 from duckielib.config import RobotConfig
 from duckielib.errors import SimulationError
@@ -108,15 +109,11 @@ def _led_positions(config: RobotConfig) -> np.ndarray:
     )
 
 
-def _to_world(points: np.ndarray, pose: Sequence[float]) -> np.ndarray:
-    x, y, theta = pose
-    cos_t, sin_t = math.cos(theta), math.sin(theta)
-    rotation = np.array([[cos_t, -sin_t], [sin_t, cos_t]])
-    return points @ rotation.T + np.array([x, y])
-
-
 class RobotArtist:
     """The patches of one drawn robot, movable from pose to pose.
+
+    The patches keep the robot's shape in the robot frame; matplotlib's own transform places
+    them at the pose (rotated by theta, then moved to x, y) when the axes are drawn.
 
     Args:
         ax: the axes to draw on.
@@ -133,6 +130,9 @@ class RobotArtist:
         self.chassis_local = _chassis_outline(config)
         self.wheels_local = [_wheel_outline(config, 1.0), _wheel_outline(config, -1.0)]
         self.leds_local = _led_positions(config) if not ghost else np.zeros((0, 2))
+        # Robot frame to world frame: set at each update, shared by every patch.
+        self.placement = Affine2D()
+        robot_to_axes = self.placement + ax.transData
         self.chassis = patches.Polygon(
             self.chassis_local,
             closed=True,
@@ -141,6 +141,7 @@ class RobotArtist:
             linestyle="--" if ghost else "-",
             linewidth=2 if ghost else 1,
             zorder=3.5 if ghost else 4,
+            transform=robot_to_axes,
         )
         self.wheels = [
             patches.Polygon(
@@ -149,12 +150,20 @@ class RobotArtist:
                 facecolor="none" if ghost else "#222222",
                 edgecolor=color if ghost else "none",
                 zorder=3.5 if ghost else 5,
+                transform=robot_to_axes,
             )
             for w in self.wheels_local
         ]
         self.leds = [
-            patches.Circle((0.0, 0.0), _LED_RADIUS, edgecolor="black", linewidth=0.5, zorder=6)
-            for _ in range(len(self.leds_local))
+            patches.Circle(
+                (float(x), float(y)),
+                _LED_RADIUS,
+                edgecolor="black",
+                linewidth=0.5,
+                zorder=6,
+                transform=robot_to_axes,
+            )
+            for x, y in self.leds_local
         ]
         for artist in (self.chassis, *self.wheels, *self.leds):
             ax.add_patch(artist)
@@ -168,13 +177,12 @@ class RobotArtist:
             artist.set_visible(pose is not None)
         if pose is None:
             return artists
-        self.chassis.set_xy(_to_world(self.chassis_local, pose))
-        for wheel, local in zip(self.wheels, self.wheels_local):
-            wheel.set_xy(_to_world(local, pose))
-        centres = _to_world(self.leds_local, pose)
+        x, y, theta = (float(value) for value in pose)
+        self.placement.clear().rotate(theta).translate(x, y)
+        for artist in artists:
+            artist.stale = True  # the placement moved them: redraw
         colors = led_colors if led_colors is not None else [(0.0, 0.0, 0.0)] * len(self.leds)
-        for led, centre, (red, green, blue) in zip(self.leds, centres, colors):
-            led.set_center((float(centre[0]), float(centre[1])))
+        for led, (red, green, blue) in zip(self.leds, colors):
             led.set_facecolor((float(red), float(green), float(blue)))
         return artists
 

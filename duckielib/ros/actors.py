@@ -16,6 +16,7 @@ from __future__ import annotations
 import ctypes
 import threading
 import time
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Protocol
 
 from duckielib.ros import context
@@ -28,12 +29,14 @@ if TYPE_CHECKING:
 __all__ = [
     "Stage",
     "Actor",
+    "Callback",
     "Event",
     "Signal",
     "Stalled",
     "ThreadActor",
     "Watchdog",
     "parked",
+    "stall_message",
     "watchdog",
 ]
 
@@ -50,9 +53,6 @@ class Stage(Protocol):
     stall_limit: float
     #: Set when an actor's code ends, so that the thread driving the graph goes on.
     _driver_wake: Signal
-
-    def stall_message(self, actor: Actor) -> str:
-        """Why ``actor``'s code was stopped, in a sentence."""
 
     def log_message(self, level: int, node: str, text: str) -> None:
         """Log ``text`` as ``node``'s, at ``level``."""
@@ -103,6 +103,25 @@ class Watchdog:
         with self.lock:
             self.holding.pop(graph, None)
 
+    def watch_callback(
+        self, graph: Stage, node: str, topic: str, call: Callable[[], None]
+    ) -> Optional[Stalled]:
+        """Run a subscription's callback of ``node`` as watched code; why it stalled, or None.
+
+        Callbacks run in the thread that drives the graph, between its events, not as actors:
+        one that computes for ``graph.stall_limit`` real seconds without calling rospy is
+        stopped as a node's main code would be.
+        """
+        watched = Callback(node, topic)
+        self.hold(graph, watched, threading.get_ident())  # type: ignore[arg-type]
+        try:
+            call()
+        except Stalled:
+            return Stalled(stall_message(graph.stall_limit, watched))
+        finally:
+            self.release(graph)
+        return None
+
     def _watch(self) -> None:
         while True:
             time.sleep(0.25)  # the wall clock: this thread runs no node code
@@ -114,7 +133,7 @@ class Watchdog:
                         continue
                     if not warned:
                         held[3] = True
-                        why = graph.stall_message(actor)
+                        why = stall_message(graph.stall_limit, actor)
                         graph.log_message(ERROR, actor.name, f"stopped: {why}.")
                     held[2] = now  # raise again later if the code swallows it
                     ctypes.pythonapi.PyThreadState_SetAsyncExc(
@@ -123,6 +142,30 @@ class Watchdog:
 
 
 watchdog = Watchdog()
+
+
+@dataclass(frozen=True)
+class Callback:
+    """A subscription's callback, as the watchdog names it (:meth:`Watchdog.watch_callback`)."""
+
+    name: str
+    topic: str
+
+
+def stall_message(limit: float, actor: Any) -> str:
+    """Why the watchdog stopped ``actor``'s code (a node's, or a callback): it never waited."""
+    if isinstance(actor, Callback):
+        return (
+            f"its callback on {actor.topic} ran for {limit:g} s of real time without calling "
+            "rospy, and simulated time cannot move while a node's code runs: no message can "
+            "arrive while the callback waits. Do the work and return; keep what the next "
+            "callback needs in a variable"
+        )
+    return (
+        f"its code ran for {limit:g} s of real time without calling rospy, and simulated time "
+        "cannot move while a node's code runs: a loop that waits for a callback or another "
+        "thread never sees it happen. Wait inside the loop with rospy.sleep() or rate.sleep()"
+    )
 
 
 class Event:
@@ -227,7 +270,7 @@ class Actor:
         except KeyboardInterrupt as error:  # Ctrl-C while the node's code ran: the driver raises it
             self.interrupt = error
         except Stalled:  # the watchdog logged why
-            self.error = Stalled(self.graph.stall_message(self))
+            self.error = Stalled(stall_message(self.graph.stall_limit, self))
         except BaseException as error:
             self.error = error
             self.graph.log_message(ERROR, self.name, format_error(error))

@@ -15,8 +15,8 @@ decides what runs when. It does so deterministically, on a simulated clock:
   their node as the current one. A greenlet takes the baton in about a microsecond, a thread in
   tens of them; the nodes cannot tell the difference. A thread a node's code starts is adopted
   the same way (:meth:`Graph.adopt_thread`): it runs as the node, with the baton.
-- Code that holds the baton for ``stall_limit`` real seconds without waiting is stopped (a
-  watchdog raises in it), since the clock cannot move while it runs.
+- Code that runs for ``stall_limit`` real seconds without waiting (a node's loop, a callback)
+  is stopped by a watchdog, since the clock cannot move while it runs.
 
 Whoever calls :meth:`Graph.run` (a notebook cell, a test, the mission runner) drives the graph;
 so does a notebook that calls ``rospy.init_node`` and then ``rospy.sleep``.
@@ -29,12 +29,19 @@ import heapq
 import itertools
 import sys
 import threading
-from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, TextIO, Tuple
 
 from duckielib.errors import DuckielibError
 from duckielib.ros import context, names
-from duckielib.ros.actors import Actor, Event, Signal, Stalled, ThreadActor, parked, watchdog
+from duckielib.ros.actors import (
+    Actor,
+    Event,
+    Signal,
+    Stalled,
+    ThreadActor,
+    parked,
+    watchdog,
+)
 from duckielib.ros.exceptions import ROSException
 from duckielib.ros.log import INFO, LogRecord
 from duckielib.ros.node import ConnectionHistory, Node, ServiceRecord, TopicRecord
@@ -67,14 +74,6 @@ class NodeCrashed(DuckielibError):
 
 #: How many real seconds a node's code may run without calling rospy, unless a graph says.
 STALL_LIMIT_S = 10.0
-
-
-@dataclass(frozen=True)
-class _Callback:
-    """A subscription's callback that runs, for the watchdog (:meth:`Graph.run_callback`)."""
-
-    name: str
-    topic: str
 
 
 class Graph(ParameterServer):
@@ -473,42 +472,11 @@ class Graph(ParameterServer):
         return predicate()
 
     def run_callback(self, node: Node, topic: str, call: Callable[[], None]) -> bool:
-        """Run a subscription's callback, watched as a node's main code is (a stall stops it).
-
-        A callback runs in the thread that drives the graph, between events: one that computes
-        for ``stall_limit`` real seconds without calling rospy is stopped, and the run with it
-        (:class:`~duckielib.ros.exceptions.NodeCrashed`, saying which callback).
-
-        Returns:
-            Whether the callback ran to its end (False: it was stopped).
-        """
-        watched = _Callback(node.name, topic)
-        watchdog.hold(self, watched, threading.get_ident())
-        try:
-            call()
-        except Stalled:
-            if self._crash is None:
-                self._crash = (node.name, Stalled(self.stall_message(watched)))
-            return False
-        finally:
-            watchdog.release(self)
-        return True
-
-    def stall_message(self, actor: Any) -> str:
-        """Why the graph stopped ``actor``'s code: it ran too long without waiting."""
-        if isinstance(actor, _Callback):
-            return (
-                f"its callback on {actor.topic} ran for {self.stall_limit:g} s of real time "
-                "without calling rospy, and simulated time cannot move while a node's code "
-                "runs: no message can arrive while the callback waits. Do the work and return; "
-                "keep what the next callback needs in a variable"
-            )
-        return (
-            f"its code ran for {self.stall_limit:g} s of real time without calling rospy, and "
-            "simulated time cannot move while a node's code runs: a loop that waits for a "
-            "callback or another thread never sees it happen. Wait inside the loop with "
-            "rospy.sleep() or rate.sleep()"
-        )
+        """Run a subscription's callback, watched; whether it ended (else the run stops, said)."""
+        stopped = watchdog.watch_callback(self, node.name, topic, call)
+        if stopped is not None and self._crash is None:
+            self._crash = (node.name, stopped)
+        return stopped is None
 
     def driving_here(self) -> bool:
         """Whether the calling thread is running the graph's events (and their callbacks)."""

@@ -110,16 +110,6 @@ class Twist(NamedTuple):
     v_lateral: float
 
 
-def _heading_of(angle: float) -> float:
-    """The ground truth's heading in [0, 2*pi) of a body's unbounded ``angle`` (radians).
-
-    Internal to the simulator: students write their own angle wrap in notebook 03.
-    """
-    wrapped = angle % math.tau
-    # A tiny negative angle wraps to exactly 2*pi in floating point.
-    return 0.0 if wrapped >= math.tau else wrapped
-
-
 def pwm_from_duty(duty: float, config: RobotConfig) -> int:
     """The PWM value (0..255) the wheels driver sends to a motor for a duty cycle.
 
@@ -363,9 +353,15 @@ class Robot:
 
     @property
     def pose(self) -> Pose:
-        """The true pose of the axle midpoint in the world frame, theta in [0, 2*pi)."""
+        """The true pose of the axle midpoint in the world frame, theta in [0, 2*pi).
+
+        pymunk keeps the body's angle unbounded (it counts whole turns); the pose reports it
+        as the one heading in [0, 2*pi) that the course uses everywhere.
+        """
         x, y = self.body.position
-        return Pose(x, y, _heading_of(self.body.angle))
+        theta = self.body.angle % math.tau
+        # A tiny negative angle wraps to exactly 2*pi in floating point: that heading is 0.
+        return Pose(x, y, 0.0 if theta >= math.tau else theta)
 
     @property
     def twist(self) -> Twist:

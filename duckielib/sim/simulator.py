@@ -32,7 +32,7 @@ from duckielib.errors import ConfigError, SimulationError
 from duckielib.missions import TASK_START
 from duckielib.sim.encoders import Encoder, EncoderReading
 from duckielib.sim.noise import NoiseProfile, noise_profile
-from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, Pose, Robot, Twist, _heading_of
+from duckielib.sim.robot import MOTOR_TIME_CONSTANT_S, Pose, Robot, Twist
 from duckielib.sim.world import World, build_space, space_stepper
 
 if TYPE_CHECKING:
@@ -322,12 +322,11 @@ class Simulator:
 
     def _record(self) -> None:
         trace = self.trace
-        body = self.robot.body
-        x, y = body.position
+        x, y, theta = self.robot.pose
         trace.times.append(self.time)
         trace.xs.append(x)
         trace.ys.append(y)
-        trace.thetas.append(_heading_of(body.angle))
+        trace.thetas.append(theta)
 
     # Wheels and encoders.
 

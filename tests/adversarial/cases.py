@@ -393,6 +393,19 @@ CASES: Dict[str, Case] = {
         after="test_world_from_start",
     ),
     "sleeps": Case(cell="import time\n\ntime.sleep(9)\n", after="test_wrap_angle"),
+    # Answers one library call does, which notebook 03 forbids: tf's matrix, and matplotlib's
+    # transform behind a helper in a cell the student added.
+    "library_answers": Case(
+        cell="from matplotlib.transforms import Affine2D\n\n\ndef _moved(pose, point):\n"
+        "    x, y, theta = pose\n"
+        "    return tuple(Affine2D().rotate(theta).translate(x, y).transform([point])[0])\n",
+        answers={
+            "rotation_matrix": "from tf.transformations import euler_matrix\n\n\n"
+            "def rotation_matrix(theta):\n    return euler_matrix(0, 0, theta)[:2, :2]\n",
+            "world_from_robot": "def world_from_robot(pose, point):\n"
+            "    return _moved(pose, point)\n",
+        },
+    ),
 }
 
 
@@ -401,7 +414,9 @@ def expected_loss(name: str) -> Tuple[str, ...]:
     return {
         "os_exit": ("test_rotation_matrix", "test_world_from_robot", "test_world_from_start"),
         "kernel_crash": ("*",),
-        "monkey_patch": ("test_wrap_angle", "test_rotation_matrix"),
+        # Its cell calls get_ipython(), through which any answer could be rebound unseen: the
+        # grader cannot hold the notebook's rules, and says so for every answer.
+        "monkey_patch": ("*",),
         "shadow_numpy": ("test_rotation_matrix",),
         "raises_outside_tests": ("test_wrap_angle",),
         "tests_turned_off": ("*",),
@@ -411,4 +426,5 @@ def expected_loss(name: str) -> Tuple[str, ...]:
         "imports_beside": ("*",),
         "rebinds_names": ("test_wrap_angle", "test_rotation_matrix"),
         "answers_48mb": ("test_wrap_angle",),
+        "library_answers": ("test_rotation_matrix", "test_world_from_robot"),
     }.get(name, ())

@@ -196,8 +196,8 @@ def test_a_ctrl_c_while_a_student_is_recorded_waits_until_the_record_is_whole(tm
 
 
 def test_a_unit_that_cannot_grade_says_so_and_asks_to_be_run_again(tmp_path):
+    from autograder.launch import run_unit
     from autograder.results import from_data
-    from autograder.sandbox.unit_process import run_unit
 
     task = {
         "student": "ada",

@@ -95,6 +95,19 @@ def test_each_notebooks_grading_is_timed_and_adds_up_to_the_whole(graded):
     assert sum(seconds.values()) == pytest.approx(timings["notebooks"], abs=0.01)
 
 
+def test_the_courses_answers_are_far_below_what_the_grader_reads_of_one(graded):
+    # The grader refuses an answer over ANSWER_LIMIT (that test fails): the course's own must
+    # stay well inside it. Its longest is a camera image, 640x480x3 bytes in base64.
+    from autograder.sandbox.inside.wire import ANSWER_LIMIT
+
+    _, results, _ = graded
+    timings = results["reference"].timings
+    assert 1_200_000 < timings["largest_answer"] < 1_300_000
+    assert timings["largest_answer"] * 3 < ANSWER_LIMIT
+    # The grader's process for one student stays small.
+    assert timings["grader_memory_mb"] < 1024
+
+
 def test_the_untouched_release_scores_zero_and_runs_to_the_end(graded):
     root, results, _ = graded
     cells = results["untouched"].cells

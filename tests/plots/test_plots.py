@@ -509,3 +509,37 @@ def test_mission_states_are_boxes_in_their_led_colours_in_order():
     assert "square\n(GREEN)\n\nrotate -90°\nstraight 1.25 m\nrotate +90°" in texts[2]
     assert texts.count("after 5 s") == 3
     assert texts[-1] == "done"
+
+
+def test_a_robot_is_drawn_at_its_pose_and_follows_each_new_one():
+    from duckielib.config import DB21
+    from duckielib.plots.world import RobotArtist
+    from duckielib.sim.robot import AXLE_TO_FRONT_FRACTION
+
+    ax = Figure().add_subplot()
+    ax.set_xlim(-1.0, 3.0)
+    ax.set_ylim(-1.0, 3.0)
+
+    def drawn(patch):  # the patch's outline in world metres
+        return ax.transData.inverted().transform(patch.get_verts())
+
+    at_origin = [drawn(patch) for patch in plots.draw_robot(ax, (0.0, 0.0, 0.0), DB21)]
+    chassis = at_origin[0]
+    nose = AXLE_TO_FRONT_FRACTION * DB21.chassis_length + 0.02
+    assert chassis[:, 0].max() == pytest.approx(nose)
+    assert chassis[:, 1].max() == pytest.approx(DB21.chassis_width / 2)
+    red = [(1.0, 0.0, 0.0)] * 5
+    turned = plots.draw_robot(ax, (1.0, 0.5, math.pi / 2), DB21, red)
+    assert len(turned) == 8  # chassis, two wheels, five LEDs
+    for local, patch in zip(at_origin, turned):
+        # A quarter turn to the left, then 1 m along x and 0.5 m along y: forward is world +y.
+        expected = np.column_stack([1.0 - local[:, 1], 0.5 + local[:, 0]])
+        np.testing.assert_allclose(drawn(patch), expected, atol=1e-9)
+    assert [tuple(led.get_facecolor()[:3]) for led in turned[3:]] == red
+    # The run player's robot moves from pose to pose, and hides without one.
+    robot = RobotArtist(ax, DB21)
+    robot.update((2.0, 1.0, math.pi), None)
+    robot.update((0.3, -0.2, -math.pi / 2), red)
+    expected = np.column_stack([0.3 + chassis[:, 1], -0.2 - chassis[:, 0]])
+    np.testing.assert_allclose(drawn(robot.chassis), expected, atol=1e-9)
+    assert all(not patch.get_visible() for patch in robot.update(None, None))

@@ -180,6 +180,20 @@ def test_theta_stays_in_zero_to_two_pi():
         assert 0.0 <= sim.pose.theta < 2 * math.pi
 
 
+@pytest.mark.parametrize(
+    ("angle", "theta"),
+    [(-1e-17, 0.0), (-0.5, math.tau - 0.5), (2 * math.tau + 1.0, 1.0), (math.tau, 0.0)],
+)
+def test_the_true_heading_is_the_bodys_angle_in_zero_to_two_pi(angle, theta):
+    # pymunk counts whole turns in the body's angle; the ground truth reports the heading.
+    sim = Simulator(seed=3, world=BIG, start_pose=(2.0, 2.0, 0.0))
+    sim.robot.body.angle = angle
+    sim.run_until(0.1)  # at rest: the angle stays, and the trace records a pose
+    assert sim.pose.theta == pytest.approx(theta, abs=1e-12)
+    assert 0.0 <= sim.pose.theta < math.tau
+    assert sim.trace.thetas[-1] == sim.pose.theta
+
+
 def test_walls_stop_the_robot():
     sim = Simulator(seed=3)
     sim.set_wheel_duties(1.0, 1.0)

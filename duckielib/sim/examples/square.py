@@ -100,13 +100,14 @@ class SquareRun:
             sim.run_until(sim.time + leg.seconds)
             end_ticks = sim.encoder_ticks
             poses = sim.trace.poses()[start_index:]
+            heading = np.unwrap(poses[:, 2])  # rad, without the jumps at the wrap
             self.reports.append(
                 LegReport(
                     leg,
                     (end_ticks[0] - start_ticks[0], end_ticks[1] - start_ticks[1]),
                     self._ticks_travelled(poses),
                     float(np.hypot(*(poses[-1, :2] - poses[0, :2]))),
-                    math.degrees(float(np.sum(_wrapped(np.diff(poses[:, 2]))))),
+                    math.degrees(float(heading[-1] - heading[0])),
                 )
             )
         sim.set_wheel_duties(0.0, 0.0)
@@ -117,12 +118,14 @@ class SquareRun:
         """Ticks worth of each wheel's true travel along its rolling direction."""
         config = self.sim.config
         ticks_per_metre = config.resolution / (2 * math.pi * config.radius)
+        heading = np.unwrap(poses[:, 2])
+        # Each step rolls along the heading half-way through it.
+        mid = (heading[:-1] + heading[1:]) / 2
         travelled = []
         for side in (1.0, -1.0):
             normal = np.column_stack((-np.sin(poses[:, 2]), np.cos(poses[:, 2])))
             contact = poses[:, :2] + side * config.baseline / 2 * normal
             step = np.diff(contact, axis=0)
-            mid = poses[:-1, 2] + _wrapped(np.diff(poses[:, 2])) / 2
             along = step[:, 0] * np.cos(mid) + step[:, 1] * np.sin(mid)
             travelled.append(float(np.sum(along)) * ticks_per_metre)
         return travelled[0], travelled[1]
@@ -163,11 +166,6 @@ class SquareRun:
         figure, ax = plt.subplots(figsize=(6, 6))
         plot_run(self.sim, ax=ax)
         figure.savefig(path, dpi=120, bbox_inches="tight")
-
-
-def _wrapped(angles: np.ndarray) -> np.ndarray:
-    """Angle differences wrapped to [-pi, pi)."""
-    return (angles + math.pi) % (2 * math.pi) - math.pi
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
