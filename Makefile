@@ -83,8 +83,10 @@ lab: $(STAMP)
 		$(LAB_ROOT) $(LAB_ARGS)
 
 # The class hub: JupyterHub with nbgrader's exchange, on this machine (as root: JupyterHub
-# starts each student's server as that student). `duckie hub users ROSTER` first; HUB_ARGS
-# passes more options (--ip 0.0.0.0 --port 8000 --hub /srv/duckiebot-hub).
+# starts each student's server as that student; Formgrader runs as the hub's own account).
+# `duckie hub users ROSTER` first. It listens on 127.0.0.1:8000; HUB_ARGS passes more options
+# (--ip 0.0.0.0 --port 8000 --hub /srv/duckiebot-hub); off this machine, serve it over HTTPS
+# (see the README).
 HUB_ARGS ?=
 hub: $(STAMP)
 	$(SUDO) $(BIN)/duckie hub start $(HUB_ARGS)

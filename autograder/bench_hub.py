@@ -324,7 +324,11 @@ def _stop(process: Optional[subprocess.Popen], names: List[str], root: Path, mod
     for name in names:
         subprocess.run(["pkill", "-KILL", "-u", name], check=False)
     time.sleep(1)
-    for name in names:
+    from autograder.hub_formgrader import service_account
+
+    # The students' accounts, and the hub's own (its Formgrader's) that the start made.
+    for name in [*names, service_account(root)]:
+        subprocess.run(["pkill", "-KILL", "-u", name], check=False, capture_output=True)
         subprocess.run(["userdel", "--remove", name], check=False, capture_output=True)
     shutil.rmtree(root, ignore_errors=True)
     ROOT.chmod(mode)

@@ -187,10 +187,18 @@ def _hub_start(hubs: Any, hub: Any, args: argparse.Namespace) -> int:
         progress=lambda line: print(line, flush=True),
     )
     command = hubs.hub_command(hub)
+    url = f"{'https' if hubs.has_certificate(hub) else 'http'}://{args.ip}:{args.port}"
     print(
-        f"the hub: http://{args.ip}:{args.port}/ (Ctrl-C stops it); Formgrader, for "
-        f"instructors: http://{args.ip}:{args.port}/services/formgrader/"
+        f"the hub: {url}/ (Ctrl-C stops it); Formgrader, for instructors: "
+        f"{url}/services/formgrader/"
     )
+    if hubs.plain_http(hub, args.ip):
+        print(
+            f"warning: the hub serves plain HTTP on {args.ip}: passwords would cross the network "
+            "in the clear. Give it a certificate in "
+            f"{hub.root / 'jupyterhub_config.local.py'} (c.JupyterHub.ssl_cert and "
+            "c.JupyterHub.ssl_key), or put a proxy with HTTPS in front and serve on 127.0.0.1."
+        )
     if args.prepare_only:
         print(f"prepared; start it with: cd {hub.state} && {' '.join(command)}")
         return 0
@@ -382,7 +390,7 @@ def _add_hub(commands: argparse._SubParsersAction) -> None:
     hub_commands = hub.add_subparsers(dest="hub_command", required=True, metavar="COMMAND")
     place = argparse.ArgumentParser(add_help=False)
     place.add_argument(
-        "--hub", default="/srv/duckiebot-hub", help="the hub's folder (/srv/duckiebot-hub)"
+        "--hub", default="/srv/duckiebot-hub", help="the hub's folder (default /srv/duckiebot-hub)"
     )
     users = hub_commands.add_parser(
         "users",
@@ -396,9 +404,13 @@ def _add_hub(commands: argparse._SubParsersAction) -> None:
     start = hub_commands.add_parser(
         "start", parents=[place], help="install what the hub needs, then run it"
     )
-    start.add_argument("--port", type=int, default=8000, help="the hub's port (8000)")
+    start.add_argument("--port", type=int, default=8000, help="the hub's port (default 8000)")
     start.add_argument(
-        "--ip", default="127.0.0.1", help="the address to serve on (0.0.0.0: every network)"
+        "--ip",
+        default="127.0.0.1",
+        help="the address to serve on (default 127.0.0.1: this machine only; 0.0.0.0: every "
+        "network, then over HTTPS: a certificate in jupyterhub_config.local.py or a proxy "
+        "with HTTPS in front, see the README)",
     )
     start.add_argument("--python", help="the Python 3.11+ the students' environment is made with")
     start.add_argument(

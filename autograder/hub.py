@@ -9,24 +9,32 @@ that only the hub's instructors can open.
 
 A hub folder (``--hub``, default :data:`DEFAULT_HUB`) holds:
 
-    hub.json              who may log in: the students and the instructors
+    hub.json              who may log in: the students and the instructors (0600: JupyterHub,
+                          root, reads it)
     passwords.csv         the first password of each account ``duckie hub users`` made (0600)
-    jupyterhub_config.py  written by ``duckie hub start``; jupyterhub_config.local.py, if
-                          there, is read after it (your authenticator, your limits)
+    jupyterhub_config.py  written by ``duckie hub start`` (0600); jupyterhub_config.local.py,
+                          if there, is read after it (your authenticator, your certificate)
     env/                  the students' Python: the student edition and JupyterHub, made with
                           a Python every user may run (never this repository: it holds
                           solutions/), with the course's Jupyter configuration in env/etc/jupyter
     proxy/                configurable-http-proxy, from npm, unless one is on the PATH
     exchange/             nbgrader's exchange; the course is :data:`COURSE_ID`
     course/               the instructors' nbgrader folder: release/, submitted/ (what
-                          ``duckie hub collect`` gathered), feedback/ (0700)
+                          ``duckie hub collect`` gathered), feedback/ (0700, root's)
     grading/              where ``duckie grade`` writes the class's grades; Formgrader
-                          serves grading/work (0700)
+                          serves grading/work (root and the hub's account only)
     state/                the hub's database, its cookie secret, the proxy's pid (0700)
 
 Isolation is the machine's own: each student's server and kernels run as their Unix user, each
 home is 0700, the exchange's inbound folder lets a student write but not list, and feedback is
-released under a name only the student's own submission secret gives.
+released under a name only the student's own submission secret gives. The hub starts a server
+only for an account of ``hub.json`` (never root or another account of the machine, even when an
+instructor, a hub admin, asks).
+
+Nothing an instructor reaches through the hub runs as root. Formgrader runs as the hub's own
+account (a system account ``duckie hub start`` makes, named after the hub's folder), in a view
+of the machine that holds only what it needs, with no terminal and no kernel
+(:mod:`autograder.hub_formgrader` says why that account and how).
 """
 
 # Over 600 lines: one class hub from accounts to returned feedback, whose steps share the hub
@@ -50,6 +58,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 
 from autograder.course import IGNORED, ROOT, CourseError
 from autograder.formgrade import write_config
+from autograder.hub_formgrader import service_account, share_grading
 from autograder.lms import read_roster
 
 __all__ = [
@@ -60,7 +69,9 @@ __all__ = [
     "account_name",
     "collect",
     "create_accounts",
+    "has_certificate",
     "lateness",
+    "plain_http",
     "write_image",
     "prepare",
     "reachable_by_others",
@@ -144,7 +155,25 @@ c.Spawner.environment = {{
 c.Spawner.http_timeout = 120
 c.Spawner.start_timeout = 180
 
-# Formgrader on the class `duckie grade --out {{hub}}/grading` graded, for instructors only.
+
+# A server only for a person of hub.json: never root or another account of the machine, even
+# when an instructor (a hub admin) adds that user to the hub and asks for its server.
+def only_the_class(spawner):
+    import pwd
+
+    name = spawner.user.name
+    if name not in c.Authenticator.allowed_users or pwd.getpwnam(name).pw_uid < {first_uid}:
+        raise ValueError(
+            f"{{name}} is not a student or an instructor of this hub: it starts servers for "
+            "the accounts of hub.json only (`duckie hub users`)."
+        )
+
+
+c.Spawner.pre_spawn_hook = only_the_class
+
+# Formgrader on the class `duckie grade --out {{hub}}/grading` graded, for instructors only: as
+# the hub's own account, in a view of its own, with no terminal and no kernel (see
+# autograder/hub_formgrader.py).
 c.JupyterHub.services = [
     {{
         "name": "formgrader",
@@ -213,16 +242,20 @@ class Hub:
             return cls(root)
         try:
             data = json.loads(settings.read_text(encoding="utf-8"))
+        except PermissionError:
+            raise HubError(
+                f"Cannot read {settings}: the class list is root's only. Run the command with sudo."
+            ) from None
         except (OSError, ValueError) as error:
             raise HubError(f"Cannot read {settings}: {error}.") from None
         return cls(root, list(data.get("students", [])), list(data.get("instructors", [])))
 
     def save(self) -> None:
-        """Write ``hub.json`` (readable by all: the hub's configuration reads it)."""
+        """Write ``hub.json``, for root only: the class list (JupyterHub reads it as root)."""
         self.root.mkdir(parents=True, exist_ok=True)
         self.root.chmod(0o755)
         data = {"students": sorted(self.students), "instructors": sorted(self.instructors)}
-        _write(self.root / "hub.json", json.dumps(data, indent=2) + "\n", 0o644)
+        _write(self.root / "hub.json", json.dumps(data, indent=2) + "\n", 0o600)
 
     @property
     def env(self) -> Path:
@@ -498,6 +531,36 @@ def _write_jupyter_config(etc: Path, exchange: Path) -> None:
     _write(etc / "nbgrader_config.py", text, 0o644)
 
 
+def _formgrader_account(hub: Hub) -> pwd.struct_passwd:
+    """The hub's own account, which Formgrader runs as; made the first time.
+
+    It is a system account with no password, no home and no login shell; an account of that
+    name that is not the hub's is refused.
+    """
+    name = service_account(hub.root)
+    comment = f"Formgrader of the class hub {hub.root}"
+    if name in hub.students or name in hub.instructors:
+        raise HubError(
+            f"The hub's own account would be {name}, the account of one of its people: move "
+            "the hub to a folder of another name (--hub)."
+        )
+    if not _account_exists(name):
+        if shutil.which("useradd") is None:
+            raise HubError("useradd is missing: install Debian's passwd package.")
+        _run(
+            ["useradd", "--system", "--user-group", "--no-create-home", "--home-dir",
+             "/nonexistent", "--shell", "/usr/sbin/nologin", "--comment", comment, name],
+            f"make the hub's account {name}",
+        )  # fmt: skip
+    found = pwd.getpwnam(name)
+    if found.pw_gecos != comment or found.pw_uid == 0 or found.pw_uid >= FIRST_UID:
+        raise HubError(
+            f"The account {name} exists and is not this hub's own ({found.pw_gecos!r}): move "
+            f"the hub to a folder of another name (--hub), or remove that account first."
+        )
+    return found
+
+
 def _configure_course(hub: Hub) -> None:
     _private_folder(hub.course)
     text = _COURSE_CONFIG.format(root=str(hub.course), course=COURSE_ID, exchange=str(hub.exchange))
@@ -515,9 +578,13 @@ def prepare(
 ) -> Path:
     """Make or bring up to date everything the hub runs on; its ``jupyterhub_config.py``.
 
+    It also makes the hub's own account, which Formgrader runs as, and gives it the grading
+    folder (:mod:`autograder.hub_formgrader`).
+
     Raises:
         HubError: if not root, if no student or instructor was added, if students could read
-            this repository's ``solutions/``, or if an install fails.
+            this repository's ``solutions/``, if bubblewrap is missing, if the hub's account
+            would be another's, or if an install fails.
     """
     _need_root("Starting the hub")
     say = progress or (lambda line: None)
@@ -531,23 +598,25 @@ def prepare(
             f"Every user of this machine can read {ROOT / 'solutions'} (the answers and hidden "
             f"tests): close the repository first (chmod o-rwx {ROOT}), then start the hub again."
         )
+    if shutil.which("bwrap") is None:
+        raise HubError(
+            "Formgrader runs in a view of its own that bubblewrap makes, and bwrap is missing: "
+            "install it (`make ros`, or apt-get install bubblewrap), then start the hub again."
+        )
     hub.save()
     _install_env(hub, python, say)
     _configure_env(hub)
     proxy = _install_proxy(hub, say)
     _private_folder(hub.state)
     _configure_course(hub)
-    work = _private_folder(hub.grading) / "work"
-    work.mkdir(exist_ok=True)
+    account = _formgrader_account(hub)
+    work = share_grading(hub.grading, account.pw_gid)
     write_config(work)
     formgrader_port = port + 2
-    command = [
-        str(Path(sys.executable).parent / "jupyterhub-singleuser"),
-        f"--ServerApp.root_dir={work}",
-        "--ServerApp.jpserver_extensions=autograder.formgrade_csp=True",
-        "--allow-root",
-    ]
+    # Started as root by JupyterHub, it runs Formgrader as the hub's account.
+    command = [sys.executable, "-I", "-m", "autograder.hub_formgrader", str(hub.root)]
     config = _HUB_CONFIG.format(
+        first_uid=FIRST_UID,
         hub=str(hub.root),
         bind_url=f"http://{ip}:{port}",
         hub_bind_url=f"http://127.0.0.1:{port + 1}",
@@ -559,6 +628,20 @@ def prepare(
     path = hub.root / "jupyterhub_config.py"
     _write(path, config, 0o600)
     return path
+
+
+def has_certificate(hub: Hub) -> bool:
+    """Whether ``jupyterhub_config.local.py`` gives the hub a certificate (it serves HTTPS)."""
+    local = hub.root / "jupyterhub_config.local.py"
+    return local.is_file() and "ssl_cert" in local.read_text(encoding="utf-8")
+
+
+def plain_http(hub: Hub, ip: str) -> bool:
+    """Whether the hub, on ``ip``, serves other machines without a certificate of its own.
+
+    Then passwords cross the network in the clear, unless a proxy with HTTPS is in front.
+    """
+    return ip not in ("127.0.0.1", "localhost", "::1") and not has_certificate(hub)
 
 
 def hub_command(hub: Hub) -> List[str]:

@@ -224,7 +224,7 @@ class _TestsHere:
         tempfile.tempdir = str(self.unit.shared)
         before = self.link.calls
         try:
-            if kind == "hidden":
+            if run is not None and kind == "hidden":
                 run.cell.update(robot)
                 run.run_hidden()
             else:

@@ -42,6 +42,8 @@ __all__ = [
     "SandboxError",
     "SandboxUnavailable",
     "check_sandbox",
+    "folders_above",
+    "generated_robot_folders",
     "run",
     "sandboxed_command",
 ]
@@ -93,14 +95,15 @@ def _readonly_paths() -> List[str]:
     return unique
 
 
-def _generated_robot_folders() -> List[str]:
+def generated_robot_folders() -> List[str]:
     """The folders of the robot project that ``duckie robot prepare`` writes, where they exist."""
     from duckielib.tools.deploy import GENERATED, PROJECT
 
     return [str(PROJECT / name) for name in GENERATED if (PROJECT / name).is_dir()]
 
 
-def _parents(path: str) -> List[str]:
+def folders_above(path: str) -> List[str]:
+    """The folders above ``path``, from the top (``/a/b/c`` gives ``/a``, ``/a/b``)."""
     parts = Path(path).parts[1:-1]
     return ["/" + "/".join(parts[: index + 1]) for index in range(len(parts))]
 
@@ -181,7 +184,7 @@ def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
         args += ["--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", "/tmp"]
     made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
     for path in _readonly_paths():
-        for parent in _parents(path):
+        for parent in folders_above(path):
             if parent not in made:
                 args += ["--perms", "0755", "--dir", parent]
                 made.add(parent)
@@ -189,7 +192,7 @@ def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
         made.add(path)
     # `duckie robot prepare` writes a solution into the robot project (the reference one, on an
     # instructor's machine): those folders stay out of sight.
-    for path in _generated_robot_folders():
+    for path in generated_robot_folders():
         args += ["--tmpfs", path]
     args += [
         "--dev", "/dev",

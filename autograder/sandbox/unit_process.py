@@ -41,8 +41,8 @@ from autograder.sandbox.bubblewrap import (
     GRADER_TASKS,
     Limits,
     SandboxUnavailable,
-    _parents,
     _readonly_paths,
+    folders_above,
     joined,
     student_groups,
     unit_user,
@@ -51,7 +51,14 @@ from autograder.sandbox.bubblewrap import check_sandbox as _check_the_sandbox
 from autograder.sandbox.groups import end_student_groups
 from autograder.sandbox.limits import STUDENT_DISK_VARIABLE
 
-__all__ = ["STUDENT_DISK", "UNIT_INSIDE", "apart", "check_sandbox", "unit_command"]
+__all__ = [
+    "STUDENT_DISK",
+    "UNIT_INSIDE",
+    "apart",
+    "check_sandbox",
+    "grader_paths",
+    "unit_command",
+]
 
 #: Where the grader's process for a student sees its own folder.
 UNIT_INSIDE = "/unit"
@@ -75,7 +82,7 @@ def unit_limits(limits: Limits) -> Limits:
     return dataclasses.replace(limits, processes=limits.processes + GRADER_TASKS)
 
 
-def _grader_paths() -> List[str]:
+def grader_paths() -> List[str]:
     """What the process for a student sees read-only: the sandbox's view, and the grader."""
     grader = str(Path(__file__).resolve().parents[1])
     paths = [*_readonly_paths(), grader]
@@ -118,8 +125,8 @@ def unit_command(
         "--perms", "1777", "--size", str(64 * 1024**2), "--tmpfs", "/tmp",
     ]  # fmt: skip
     made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
-    for path in _grader_paths():
-        for parent in _parents(path):
+    for path in grader_paths():
+        for parent in folders_above(path):
             if parent not in made:
                 args += ["--perms", "0755", "--dir", parent]
                 made.add(parent)

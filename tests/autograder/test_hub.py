@@ -4,9 +4,14 @@ instructor collects, grades and returns, and each student reads their own feedba
 Everything is real: JupyterHub with the machine's accounts (PAM; ``duckie hub users`` makes
 them from a Canvas roster), configurable-http-proxy from npm, each student's JupyterLab running
 as their Unix user from the students' Python that ``duckie hub start`` installs, nbgrader's
-exchange, the sandboxed grader and Formgrader as a hub service. The accounts and the hub's
-folder are removed afterwards. Making accounts and switching users needs root.
+exchange, the sandboxed grader and Formgrader as a hub service, run as the hub's own account.
+An instructor then tries, in the browser and through the servers' APIs, every way from the hub
+to a root process. The accounts and the hub's folder are removed afterwards. Making accounts
+and switching users needs root.
 """
+
+# Over 600 lines: one real hub (minutes to start) serves every test here, so the class's whole
+# loop and what students and instructors can reach through it share this module.
 
 from __future__ import annotations
 
@@ -15,6 +20,7 @@ import datetime
 import io
 import json
 import os
+import pwd
 import re
 import secrets
 import shutil
@@ -26,7 +32,7 @@ import time
 import urllib.request
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Dict
+from typing import Dict, List
 
 import pytest
 from pace import seconds
@@ -34,6 +40,7 @@ from pace import seconds
 from autograder.bench_hub import free_ports
 from autograder.course import ROOT
 from autograder.hub import HubError, account_name, reachable_by_others, roster_accounts
+from autograder.hub_formgrader import NO_KERNEL, service_account, share, share_grading
 
 DUCKIE = str(Path(sys.executable).parent / "duckie")
 ASSIGNMENT = "02_ros_concepts"
@@ -120,6 +127,67 @@ def test_a_roster_login_that_is_a_system_account_is_refused(tmp_path):
     assert not (tmp_path / "hub" / "passwords.csv").exists()
 
 
+@pytest.mark.parametrize(
+    ("folder", "name"),
+    [
+        ("/srv/duckiebot-hub", "duckiebot-hub"),
+        ("/srv/Class 2026", "class-2026"),
+        ("/srv/2026", "hub-2026"),
+        ("/srv/" + "x" * 40, "x" * 32),
+    ],
+)
+def test_the_hubs_account_is_named_after_its_folder(folder, name):
+    assert service_account(Path(folder)) == name
+
+
+def test_the_hub_says_its_default_address_and_https_for_every_network():
+    shown = " ".join(_run(DUCKIE, "hub", "start", "--help").stdout.split())
+    assert "default 127.0.0.1: this machine only" in shown
+    assert "then over HTTPS" in shown
+
+
+@as_root
+def test_the_grading_folder_is_roots_and_the_accounts_and_roots_new_files_are_shared(tmp_path):
+    group = 65534  # nogroup: only the group's number matters here
+    tmp_path.chmod(0o755)
+    grading = tmp_path / "grading"
+    work = grading / "work"
+    work.mkdir(parents=True)
+    # What another user planted where root will write: a link to a file of root's elsewhere.
+    secret = tmp_path / "secret"
+    secret.write_text("root's")
+    secret.chmod(0o600)
+    (work / "release").symlink_to(secret)
+    share_grading(grading, group)
+    assert [
+        (path.name, oct(path.stat().st_mode & 0o7777), path.stat().st_uid, path.stat().st_gid)
+        for path in (grading, work, work / "gradebook.db", work / "release")
+    ] == [
+        ("grading", "0o2750", 0, group),
+        ("work", "0o3770", 0, group),
+        ("gradebook.db", "0o660", 0, group),
+        ("release", "0o2755", 0, group),
+    ]
+    assert oct(secret.stat().st_mode & 0o777) == "0o600"
+    # root writes as `duckie grade` does (0600); the account's own files and links stay theirs.
+    notebook = work / "autograded" / "ada" / "02" / "02.ipynb"
+    notebook.parent.mkdir(parents=True)
+    notebook.write_text("{}")
+    notebook.chmod(0o600)
+    theirs = work / "theirs.txt"
+    theirs.write_text("x")
+    os.chown(theirs, 65534, group)
+    theirs.chmod(0o600)
+    os.link(secret, work / "linked")  # two names: never changed
+    (work / "pointer").symlink_to(secret)
+    assert share(work, group) >= 1
+    assert oct(notebook.stat().st_mode & 0o777) == "0o640"
+    assert notebook.parent.stat().st_mode & 0o2050 == 0o2050
+    assert oct(theirs.stat().st_mode & 0o777) == "0o600"
+    assert (secret.stat().st_gid, oct(secret.stat().st_mode & 0o777)) == (0, "0o600")
+    assert share(work, group) == 0  # nothing left to share
+
+
 # -- a class on a real hub ----------------------------------------------------------------------
 
 
@@ -201,6 +269,7 @@ def klass(tmp_path_factory):
         assert "3 students and 1 instructors may log in" in done.stdout
         passwords = dict(csv.reader(io.StringIO((root / "passwords.csv").read_text())))
         assert (root / "passwords.csv").stat().st_mode & 0o777 == 0o600
+        assert (root / "hub.json").stat().st_mode & 0o777 == 0o600
         # A repository every user can read is refused: its solutions/ holds the answers.
         solutions.chmod(mode | 0o005)
         if reachable_by_others(solutions):
@@ -229,10 +298,11 @@ def klass(tmp_path_factory):
             except subprocess.TimeoutExpired:
                 os.killpg(process.pid, signal.SIGKILL)
                 process.wait()
-        for name in names.values():
-            subprocess.run(["pkill", "-KILL", "-u", name], check=False)
+        accounts = [*names.values(), service_account(root)]
+        for name in accounts:
+            subprocess.run(["pkill", "-KILL", "-u", name], check=False, capture_output=True)
         time.sleep(0.5)
-        for name in names.values():
+        for name in accounts:
             subprocess.run(["userdel", "--remove", name], check=False, capture_output=True)
         shutil.rmtree(root, ignore_errors=True)
         solutions.chmod(mode)
@@ -440,15 +510,11 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
     turned = bo.request.get(f"{klass.url}/services/formgrader/formgrader/manage_assignments")
     assert turned.status == 403
     assert "do not have permission to access JupyterHub service formgrader" in turned.text()
-    # The instructor grades ada's answer (in Formgrader's gradebook, as Formgrader saves it).
-    from nbgrader.api import Gradebook
-
-    with Gradebook(f"sqlite:///{grading / 'work' / 'gradebook.db'}") as gradebook:
-        grade = gradebook.find_grade("answer_find_topic", ASSIGNMENT, ASSIGNMENT, names["ada"])
-        grade.manual_score = 1.5
-        comment = gradebook.find_comment("answer_find_topic", ASSIGNMENT, ASSIGNMENT, names["ada"])
-        comment.manual_comment = COMMENT
-        gradebook.db.commit()
+    # The instructor grades ada's answer in Formgrader, which runs as the hub's account: it
+    # shows her autograded notebook (which `duckie grade` wrote as root) with the rubric, and
+    # saves the points and the comment into the gradebook.
+    _grade_in_formgrader(prof, klass)
+    assert blocked == []
     # A regrade (nothing new collected) keeps what the instructor gave.
     klass.hub("collect", ASSIGNMENT)
     klass.duckie("grade", str(submitted), "--out", str(grading), "--assignment", ASSIGNMENT,
@@ -499,6 +565,8 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
         f"ls {klass.root / 'state'}",
         f"cat {klass.root / 'passwords.csv'}",
         f"cat {klass.root / 'jupyterhub_config.py'}",
+        f"cat {klass.root / 'hub.json'}",
+        f"ls {klass.root / 'grading' / 'work'}",
     ):
         tried = _as(names["ada"], attempt)
         assert tried.returncode != 0, attempt
@@ -508,6 +576,189 @@ def test_a_class_fetches_submits_is_graded_and_reads_its_own_feedback(klass, bro
         answer = ada.request.get(klass.url + path)
         assert answer.status == 403, (path, answer.status)
         assert "robot_topic" not in answer.text()
+
+
+def _grade_in_formgrader(prof, klass: Class) -> None:
+    """Give ada's answer its points and comment in Formgrader's page, as an instructor does."""
+    from nbgrader.api import Gradebook
+
+    names = klass.names
+    work = klass.root / "grading" / "work"
+    autograded = work / "autograded" / names["ada"] / NOTEBOOK
+    # Written 0600 by root: the hub's launcher shares it with its account within a second.
+    deadline = time.monotonic() + seconds(10)
+    while not autograded.stat().st_mode & 0o040:
+        assert time.monotonic() < deadline, "the autograded notebook was not shared in time"
+        time.sleep(0.2)
+    database = f"sqlite:///{work / 'gradebook.db'}"
+    with Gradebook(database) as gradebook:
+        submission = gradebook.find_submission_notebook(ASSIGNMENT, ASSIGNMENT, names["ada"]).id
+    prof.goto(f"{klass.url}/services/formgrader/formgrader/submissions/{submission}/")
+    prof.get_by_text(ANSWERS["ada"]).first.wait_for()
+    prof.get_by_text("For the grader, not in the student's notebook").first.wait_for()
+    # The page's grades and comments are loaded (typed before, they would be drawn over).
+    prof.wait_for_function("() => formgrader.grades.loaded && formgrader.comments.loaded")
+    score = prof.locator("input.score#answer_find_topic")
+    comment = prof.locator("textarea#answer_find_topic-comment")
+    score.fill("1.5")
+    comment.click()  # leaving the score saves it
+    comment.fill(COMMENT)
+    score.click()  # and leaving the comment saves it
+    deadline = time.monotonic() + seconds(30)
+    while True:
+        with Gradebook(database) as gradebook:
+            grade = gradebook.find_grade("answer_find_topic", ASSIGNMENT, ASSIGNMENT, names["ada"])
+            given = gradebook.find_comment(
+                "answer_find_topic", ASSIGNMENT, ASSIGNMENT, names["ada"]
+            ).manual_comment
+            saved = (grade.manual_score, given)
+        if saved == (1.5, COMMENT):
+            break
+        assert time.monotonic() < deadline, f"Formgrader did not save the grade: {saved}"
+        time.sleep(0.5)
+    # The gradebook stays root's and the group's, whoever wrote it last; no journal is left.
+    found = (work / "gradebook.db").stat()
+    account = pwd.getpwnam(service_account(klass.root))
+    assert (found.st_uid, found.st_gid, found.st_mode & 0o777) == (0, account.pw_gid, 0o660)
+    assert not (work / "gradebook.db-journal").exists()
+
+
+def _processes(word: str = "") -> List[Dict[str, object]]:
+    """Each process of the machine whose command line holds ``word``: its argv and status."""
+    found = []
+    for folder in Path("/proc").iterdir():
+        if not folder.name.isdigit():
+            continue
+        try:
+            argv = (folder / "cmdline").read_bytes().decode(errors="replace").split("\0")
+            lines = (folder / "status").read_text().splitlines()
+        except OSError:  # ended meanwhile
+            continue
+        if any(word in part for part in argv):
+            status = dict(line.split(":\t", 1) for line in lines if ":\t" in line)
+            found.append({"argv": argv, **status})
+    return found
+
+
+def _servers() -> List[Dict[str, object]]:
+    """The Jupyter servers running on the machine (not the bubblewrap that starts one)."""
+    return [
+        found
+        for found in _processes("jupyterhub-singleuser")
+        if not str(found["argv"][0]).endswith("bwrap")
+    ]
+
+
+def _check_formgrader_process(klass: Class, account: pwd.struct_passwd) -> None:
+    """Formgrader's server runs as the hub's account, and no server of the hub as root.
+
+    It has no capability and no way to one, and it is the account's only process: no kernel,
+    no terminal.
+    """
+    work = klass.root / "grading" / "work"
+    formgrader = [found for found in _servers() if f"--ServerApp.root_dir={work}" in found["argv"]]
+    assert len(formgrader) == 1, _servers()
+    (server,) = formgrader
+    assert server["Uid"].split() == [str(account.pw_uid)] * 4
+    assert server["Gid"].split() == [str(account.pw_gid)] * 4
+    assert server["Groups"].strip() == ""
+    assert int(server["CapEff"], 16) == int(server["CapPrm"], 16) == 0
+    assert int(server["CapBnd"], 16) == 0
+    assert server["NoNewPrivs"].strip() == "1"
+    assert "--allow-root" not in server["argv"]
+    mine = [found for found in _processes() if found["Uid"].split()[0] == str(account.pw_uid)]
+    assert [found["argv"] for found in mine] == [server["argv"]]
+    assert all(found["Uid"].split()[0] != "0" for found in _servers()), _servers()
+
+
+def _try_formgrader_api(prof, klass: Class, account: pwd.struct_passwd) -> None:
+    """Formgrader's REST API, with the instructor's cookies, opens no way to root.
+
+    What it does, it does as the hub's account (a file made through it is the account's); it
+    refuses a terminal, a kernel, a notebook's session and Formgrader's autograde (which would
+    run students' code).
+    """
+    base = f"{klass.url}/services/formgrader"
+    xsrf = next(
+        cookie["value"]
+        for cookie in prof.context.cookies()
+        if cookie["name"] == "_xsrf" and cookie["path"].startswith("/services/formgrader")
+    )
+    headers = {"X-XSRFToken": xsrf}
+    made = prof.request.post(f"{base}/api/contents", headers=headers, data={"type": "file"})
+    assert made.status == 201, made.text()
+    path = made.json()["path"]
+    assert (klass.root / "grading" / "work" / path).stat().st_uid == account.pw_uid
+    assert prof.request.delete(f"{base}/api/contents/{path}", headers=headers).status == 204
+    assert '"terminalsAvailable": false' in prof.request.get(f"{base}/lab").text()
+    terminal = prof.request.post(f"{base}/api/terminals", headers=headers)
+    assert terminal.status == 404, terminal.text()
+    kernel = prof.request.post(f"{base}/api/kernels", headers=headers, data={"name": "python3"})
+    assert kernel.status == 403, kernel.text()
+    assert NO_KERNEL in kernel.json()["message"]
+    notebook = {"path": "x.ipynb", "type": "notebook", "name": "", "kernel": {"name": "python3"}}
+    session = prof.request.post(f"{base}/api/sessions", headers=headers, data=notebook)
+    assert session.status >= 400, session.text()  # 500: the server wraps the refusal
+    assert NO_KERNEL in session.json()["message"]
+    assert prof.request.get(f"{base}/api/sessions").json() == []
+    assert prof.request.get(f"{base}/api/kernels").json() == []
+    student = klass.names["ada"]
+    autograde = prof.request.post(
+        f"{base}/formgrader/api/submission/{ASSIGNMENT}/{student}/autograde", headers=headers
+    )
+    assert autograde.status == 403, autograde.text()
+    assert NO_KERNEL in autograde.json()["message"]
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)  # the hub's start, if this test runs alone
+@as_root
+def test_an_instructor_finds_no_way_to_root_through_the_hub(klass, browser):
+    account = pwd.getpwnam(service_account(klass.root))
+    assert 0 < account.pw_uid < 1000  # a system account: no password, no home, no shell
+    assert account.pw_shell == "/usr/sbin/nologin"
+    prof = _login(browser, klass, "prof")
+    base = f"{klass.url}/services/formgrader"
+    prof.goto(f"{base}/")
+    prof.get_by_text("Manage Assignments").first.wait_for()
+    _check_formgrader_process(klass, account)
+
+    # Formgrader's JupyterLab offers no terminal and no kernel: no launcher card, no Terminal
+    # in File > New; its Console opens no kernel.
+    prof.goto(f"{base}/lab")
+    prof.locator(".jp-Launcher").first.wait_for()
+    cards = prof.locator(".jp-LauncherCard").all_inner_texts()
+    assert not [card for card in cards if "Terminal" in card or "Python" in card], cards
+    prof.locator(".lm-MenuBar-itemLabel", has_text="File").first.click()
+    prof.locator(".lm-Menu-itemLabel", has_text="New").first.click()
+    submenu = prof.locator(".lm-Menu").nth(1)
+    submenu.locator(".lm-Menu-itemLabel", has_text="Text File").wait_for()
+    assert "Terminal" not in submenu.locator(".lm-Menu-itemLabel").all_inner_texts()
+    submenu.locator(".lm-Menu-itemLabel", has_text="Console").click()
+    dialog = prof.locator(".jp-Dialog", has_text="Select Kernel")
+    dialog.wait_for()
+    choices = dialog.locator("option").all_inner_texts()
+    assert set(choices) == {"No Kernel"}, choices
+    dialog.locator(".jp-mod-accept").first.click()
+    time.sleep(seconds(3))
+    assert prof.request.get(f"{base}/api/kernels").json() == []
+    _try_formgrader_api(prof, klass, account)
+    _check_formgrader_process(klass, account)
+
+    # The hub, of which instructors are admins, starts no server for an account that is not
+    # the class's: not root's, even when an instructor asks.
+    hub_xsrf = next(
+        cookie["value"]
+        for cookie in prof.context.cookies()
+        if cookie["name"] == "_xsrf" and cookie["path"].startswith("/hub")
+    )
+    headers = {"X-XSRFToken": hub_xsrf}
+    prof.request.post(f"{klass.url}/hub/api/users/root", headers=headers)
+    started = prof.request.post(f"{klass.url}/hub/api/users/root/server", headers=headers)
+    assert started.status == 500, started.text()
+    assert "root is not a student or an instructor of this hub" in klass.log.read_text()
+    assert prof.request.get(f"{klass.url}/hub/api/users/root").json()["servers"] == {}
+    assert all(found["Uid"].split()[0] != "0" for found in _servers()), _servers()
 
 
 @as_root

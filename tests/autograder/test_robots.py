@@ -55,7 +55,9 @@ def course_with(folder, name, replacements):
 def graded_test(tmp_path, name, grade_id, replacements=None):
     """Run test ``grade_id`` of notebook ``name`` as the grader does; its outputs."""
     export = course_with(tmp_path / "export", name, replacements or {})
-    unit = types.SimpleNamespace(folder=tmp_path, limits=Limits(), use_sandbox=True, export=export)
+    unit = types.SimpleNamespace(
+        folder=tmp_path, student_disk=tmp_path, limits=Limits(), use_sandbox=True, export=export
+    )
     cells = load_solution_nb(name)["cells"]
     cells = [{**cell, "source": source(cell)} for cell in cells]
     text = next(cell["source"] for cell in cells if nbgrader(cell).get("grade_id") == grade_id)
@@ -88,7 +90,9 @@ def test_the_robot_tests_take_the_graders_robot_and_never_ask_the_kernel_for_it(
     # (one that returns a perfect report) is never the test's.
     cells = [{**cell, "source": source(cell)} for cell in load_solution_nb("09_mission")["cells"]]
     space = prelude(cells)
-    unit = types.SimpleNamespace(folder=tmp_path, limits=Limits(), use_sandbox=True, export=None)
+    unit = types.SimpleNamespace(
+        folder=tmp_path, student_disk=tmp_path, limits=Limits(), use_sandbox=True, export=None
+    )
     space.update(robot_names(unit, space, time.monotonic() + 60))
     for grade_id in ("test_mission_node", "test_mission_closure"):
         text = next(cell["source"] for cell in cells if nbgrader(cell).get("grade_id") == grade_id)
