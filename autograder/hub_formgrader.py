@@ -241,7 +241,11 @@ def view_command(
         assignments: the course's assignments, shown as empty folders in ``source``.
         source: where Formgrader's configuration says the course's source is.
     """
-    from autograder.sandbox.bubblewrap import folders_above, generated_robot_folders
+    from autograder.sandbox.bubblewrap import (
+        folders_above,
+        generated_robot_folders,
+        read_only_view,
+    )
     from autograder.sandbox.unit_process import grader_paths
 
     bwrap = shutil.which("bwrap")
@@ -259,13 +263,10 @@ def view_command(
         "--unshare-cgroup-try",
         "--die-with-parent",
         "--new-session",
-        "--symlink", "usr/lib", "/lib",
-        "--symlink", "usr/lib64", "/lib64",
-        "--symlink", "usr/bin", "/bin",
-        "--symlink", "usr/sbin", "/sbin",
-        "--perms", "1777", "--size", str(TMP_BYTES), "--tmpfs", "/tmp",
-    ]  # fmt: skip
-    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
+    ]
+    tmp = ["--perms", "1777", "--size", str(TMP_BYTES), "--tmpfs", "/tmp"]
+    shown, made = read_only_view(grader_paths(), tmp)
+    args += shown
 
     def folders(*paths: str) -> None:
         for path in paths:
@@ -273,10 +274,6 @@ def view_command(
                 args.extend(["--perms", "0755", "--dir", path])
                 made.add(path)
 
-    for path in grader_paths():
-        folders(*folders_above(path))
-        args += ["--ro-bind", path, path]
-        made.add(path)
     # `duckie robot prepare` writes a solution into the robot project: out of sight, as in the
     # students' sandboxes.
     for path in generated_robot_folders():

@@ -200,7 +200,13 @@ def _family(path: str) -> Tuple[Optional[str], str]:
 
 
 def _related(path: str, allowed: str) -> bool:
-    return path == allowed or path.startswith(allowed + ".") or allowed.startswith(path + ".")
+    if path == allowed or path.startswith(allowed + ".") or allowed.startswith(path + "."):
+        return True
+    # A package's name for what one of its modules defines: duckielib.bags.Bag allows
+    # duckielib.bags.reader.Bag (and its methods).
+    package, _, name = allowed.rpartition(".")
+    inner = path[len(package) + 1 :].split(".") if path.startswith(package + ".") else []
+    return name in inner[1:]
 
 
 class _Allowed:

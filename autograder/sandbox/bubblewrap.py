@@ -24,7 +24,7 @@ import shutil
 import subprocess
 import sys
 from pathlib import Path
-from typing import Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import Dict, Iterator, List, Optional, Sequence, Set, Tuple
 
 from autograder.sandbox.groups import (
     end_student_groups,
@@ -44,6 +44,7 @@ __all__ = [
     "check_sandbox",
     "folders_above",
     "generated_robot_folders",
+    "read_only_view",
     "run",
     "sandboxed_command",
 ]
@@ -100,6 +101,36 @@ def generated_robot_folders() -> List[str]:
     from duckielib.tools.deploy import GENERATED, PROJECT
 
     return [str(PROJECT / name) for name in GENERATED if (PROJECT / name).is_dir()]
+
+
+def read_only_view(paths: Sequence[str], tmp: Sequence[str]) -> Tuple[List[str], Set[str]]:
+    """Bubblewrap's options for a view of the machine that shows ``paths`` read-only.
+
+    Each path appears at its own place, the folders above it made empty (``0755``), with the
+    system's usual links (``/bin`` to ``usr/bin``...). ``tmp`` are the options that make
+    ``/tmp``: they come first, so that a path that lives under ``/tmp`` (a Python environment
+    there) is shown on top of it.
+
+    Returns:
+        The options, and the folders they show or make (a caller adding its own folders to
+        the view makes each only once).
+    """
+    args = [
+        "--symlink", "usr/lib", "/lib",
+        "--symlink", "usr/lib64", "/lib64",
+        "--symlink", "usr/bin", "/bin",
+        "--symlink", "usr/sbin", "/sbin",
+        *tmp,
+    ]  # fmt: skip
+    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
+    for path in paths:
+        for parent in folders_above(path):
+            if parent not in made:
+                args += ["--perms", "0755", "--dir", parent]
+                made.add(parent)
+        args += ["--ro-bind", path, path]
+        made.add(path)
+    return args, made
 
 
 def folders_above(path: str) -> List[str]:
@@ -172,24 +203,12 @@ def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
         "--unshare-cgroup-try",
         "--die-with-parent",
         "--new-session",
-        "--symlink", "usr/lib", "/lib",
-        "--symlink", "usr/lib64", "/lib64",
-        "--symlink", "usr/bin", "/bin",
-        "--symlink", "usr/sbin", "/sbin",
-    ]  # fmt: skip
-    # /tmp first: a Python environment that lives under /tmp is bound on top of it below.
+    ]
     if tmp is not None:
-        args += ["--bind", str(tmp), "/tmp"]
+        shown = ["--bind", str(tmp), "/tmp"]
     else:
-        args += ["--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", "/tmp"]
-    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
-    for path in _readonly_paths():
-        for parent in folders_above(path):
-            if parent not in made:
-                args += ["--perms", "0755", "--dir", parent]
-                made.add(parent)
-        args += ["--ro-bind", path, path]
-        made.add(path)
+        shown = ["--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", "/tmp"]
+    args += read_only_view(_readonly_paths(), shown)[0]
     # `duckie robot prepare` writes a solution into the robot project (the reference one, on an
     # instructor's machine): those folders stay out of sight.
     for path in generated_robot_folders():

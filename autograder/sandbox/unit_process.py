@@ -42,8 +42,8 @@ from autograder.sandbox.bubblewrap import (
     Limits,
     SandboxUnavailable,
     _readonly_paths,
-    folders_above,
     joined,
+    read_only_view,
     student_groups,
     unit_user,
 )
@@ -118,20 +118,9 @@ def unit_command(
         "--unshare-uts",
         "--die-with-parent",
         "--new-session",
-        "--symlink", "usr/lib", "/lib",
-        "--symlink", "usr/lib64", "/lib64",
-        "--symlink", "usr/bin", "/bin",
-        "--symlink", "usr/sbin", "/sbin",
-        "--perms", "1777", "--size", str(64 * 1024**2), "--tmpfs", "/tmp",
-    ]  # fmt: skip
-    made = {"/usr", "/etc", "/lib", "/lib64", "/bin", "/sbin", "/tmp"}
-    for path in grader_paths():
-        for parent in folders_above(path):
-            if parent not in made:
-                args += ["--perms", "0755", "--dir", parent]
-                made.add(parent)
-        args += ["--ro-bind", path, path]
-        made.add(path)
+    ]
+    tmp = ["--perms", "1777", "--size", str(64 * 1024**2), "--tmpfs", "/tmp"]
+    args += read_only_view(grader_paths(), tmp)[0]
     args += [
         "--dev", "/dev",
         # The machine's own /proc: the sandboxes made inside mount a /proc of their own, which

@@ -302,6 +302,34 @@ def wrap_angle(theta):
     return 0.0 if wrapped >= 2 * math.pi else wrapped
 """
 
+# A result of full marks, written wherever the grader's process for the student keeps its own.
+_FORGE_A_RESULT = """\
+import json
+import os
+
+forged = {"student": "forges_a_result", "cells": {}, "problems": [], "complete": True}
+written = []
+for path in ("/unit/out/result.json", "/unit/result.json", "../../out/result.json",
+             "../out/result.json", "result.json"):
+    try:
+        with open(path, "w") as handle:
+            json.dump(forged, handle)
+        written.append(os.path.abspath(path))
+    except OSError:
+        pass
+print("written:", written)
+"""
+
+# A user namespace of its own, where the code would be root.
+_MAKE_A_NAMESPACE = """\
+import ctypes
+import os
+
+libc = ctypes.CDLL(None, use_errno=True)
+made = libc.unshare(0x10000000)  # CLONE_NEWUSER
+print("unshare:", made, os.strerror(ctypes.get_errno()) if made else "made")
+"""
+
 CASES: Dict[str, Case] = {
     "reference": Case(),
     "infinite_loop": Case(cell="while True:\n    pass\n"),
@@ -393,6 +421,15 @@ CASES: Dict[str, Case] = {
         after="test_world_from_start",
     ),
     "sleeps": Case(cell="import time\n\ntime.sleep(9)\n", after="test_wrap_angle"),
+    # Attacks on the grader's process for a student: a result of full marks written where the
+    # grader keeps its own, every process the code can signal killed, a user namespace, a
+    # kernel that dies after the last test's visible part (the hidden parts run again).
+    "forges_a_result": Case(cell=_FORGE_A_RESULT, blank=True),
+    "kills_everything": Case(
+        cell="import os\nimport signal\n\nos.kill(-1, signal.SIGKILL)\n", after="test_wrap_angle"
+    ),
+    "makes_a_namespace": Case(cell=_MAKE_A_NAMESPACE),
+    "dies_at_the_end": Case(cell="import os\n\nos._exit(0)\n", after="test_world_from_start"),
     # Answers one library call does, which notebook 03 forbids: tf's matrix, and matplotlib's
     # transform behind a helper in a cell the student added.
     "library_answers": Case(
@@ -427,4 +464,8 @@ def expected_loss(name: str) -> Tuple[str, ...]:
         "rebinds_names": ("test_wrap_angle", "test_rotation_matrix"),
         "answers_48mb": ("test_wrap_angle",),
         "library_answers": ("test_rotation_matrix", "test_world_from_robot"),
+        "forges_a_result": ("*",),
+        # Its own sandbox's processes die, the notebook's server among them: nothing is left
+        # to run the notebook or its tests.
+        "kills_everything": ("*",),
     }.get(name, ())

@@ -81,6 +81,13 @@ def graded(sandbox, tmp_path_factory):
         str(ROOT / "course"),
         str(submissions / "reference"),
         str(out / "work" / "sandboxes" / "reference" / ASSIGNMENT),
+        # The grader's process for a student: its course (the hidden tests), its gradebook, its
+        # result, as that process sees them.
+        "/unit/course/source",
+        "/unit/course/gradebook.db",
+        "/unit/nbgrader/gradebook.db",
+        "/unit/out",
+        "/unit/task.json",
     ]
     for name, case in CASES.items():
         build(submissions, name, case, paths)
@@ -395,3 +402,34 @@ def test_an_answer_a_library_call_does_fails_with_the_notebooks_rule(graded):
     )
     page = (out / "feedback" / "library_answers.html").read_text()
     assert "tf.transformations.euler_matrix" in page
+
+
+def test_the_graders_process_for_a_student_is_out_of_the_students_reach(graded):
+    # A forged result is written nowhere the grader reads; the code kills what it can (its
+    # own sandbox's processes, not the grader's: the student is graded and said); no user
+    # namespace can be made in the sandbox.
+    results, out, _ = graded
+    forged = results["forges_a_result"]
+    printed = "".join(o.get("text", "") for o in _outputs(out, "forges_a_result"))
+    assert "written: [" in printed
+    assert "/unit/out" not in printed.split("written:")[1]
+    assert forged.total == 0
+    assert forged.complete
+    killed = results["kills_everything"]
+    assert killed.complete
+    assert killed.total == 0
+    assert not [p for p in killed.problems if p.startswith("Not graded")]
+    assert any("03_frames: the notebook" in p for p in killed.problems), killed.problems
+    printed = "".join(o.get("text", "") for o in _outputs(out, "makes_a_namespace"))
+    assert "unshare: -1" in printed, printed
+    assert results["makes_a_namespace"].total == FULL_MARKS
+    assert results["reference"].total == FULL_MARKS
+
+
+def test_a_kernel_that_dies_after_the_last_test_keeps_every_point(graded):
+    # The visible parts ran where the notebook reached them; the hidden parts, after its last
+    # cell, ran whole in a new kernel that ran the cells before the one the kernel died in.
+    results, _, _ = graded
+    result = results["dies_at_the_end"]
+    assert result.total == FULL_MARKS
+    assert any("the kernel died" in problem for problem in result.problems)

@@ -155,6 +155,18 @@ def test_the_course_notebooks_own_simulator_is_no_answer():
     }
 
 
+def test_what_the_course_uses_is_allowed_by_any_of_its_names():
+    # The course's plot_theta uses duckielib.bags.Bag; the class is defined in
+    # duckielib.bags.reader, and importing it from there is the same class.
+    source = next(
+        cell.source
+        for cell in course("10_bag_analysis")
+        if cell.metadata.get("nbgrader", {}).get("grade_id") == "plot_theta"
+    )
+    answer = "from duckielib.bags.reader import Bag as Bag\n" + _without_markers(source)
+    assert broken("10_bag_analysis", {"plot_theta": answer}) == {}
+
+
 def test_rospy_is_for_the_nodes_only():
     answer = (
         "import rospy\n\n\ndef forward_kinematics(omega_left, omega_right, R, baseline):\n"
@@ -486,3 +498,12 @@ def test_plain_dict_cells_with_list_sources_are_read():
         {"cell_type": "markdown", "metadata": {}, "source": "import cv2"},
     ]
     assert broken_rules(cells, course("03_frames"), "03_frames") == {"wrap_angle": HEADING_OF}
+
+
+def _without_markers(source: str) -> str:
+    """The solution region of ``source`` kept, its marker lines dropped."""
+    return "".join(
+        line
+        for line in source.splitlines(keepends=True)
+        if line.strip() not in ("### BEGIN SOLUTION", "### END SOLUTION")
+    )
