@@ -505,11 +505,15 @@ class Link:
     def ask(self, request: Dict[str, Any]) -> Any:
         """Send ``request`` to the kernel; the value it answered, or the error it raised."""
         self.calls += 1
+        from duckielib.sim.link.wire import nests_deeper
+
         text = self.send(request)
         self.largest = max(self.largest, len(text))
+        if nests_deeper(text, MAX_DEPTH + 4):  # read without recursing, before json does
+            raise CallsBroken(f"the kernel's answer nests more than {MAX_DEPTH} levels deep")
         try:
             reply = json.loads(text)
-        except (ValueError, RecursionError):
+        except ValueError:
             reply = None
         if type(reply) is dict and len(reply) == 1 and "broken" in reply:
             raise CallsBroken(str(reply["broken"])[:MAX_TEXT])

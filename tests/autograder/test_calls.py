@@ -167,6 +167,9 @@ def test_a_missing_function_is_a_name_error_and_a_kernel_that_answers_nonsense_f
     assert outputs[-1]["ename"] == "KernelError"
     with pytest.raises(CallsBroken):
         Link(lambda request: "[1, 2", {}).get("f")
+    # An answer nested a million deep is refused before any JSON reader recurses into it.
+    with pytest.raises(CallsBroken, match="nests more than 64 levels deep"):
+        Link(lambda request: '{"value": ' + "[" * 1_000_000, {}).get("f")
 
 
 def test_the_tests_imports_and_definitions_are_the_graders():
