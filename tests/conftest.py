@@ -12,6 +12,7 @@ import signal
 from pathlib import Path
 
 import pytest
+from cpu_budget import Meter, cpu_seconds, summary
 from pace import pace
 
 _IN_CI = os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
@@ -49,6 +50,7 @@ LONGEST_FIRST = (
 def pytest_configure(config):
     # Measured before the workers start, so that they and what they run share one pace.
     config.pace = pace()
+    config.cpu_meter = Meter()
     # A suite started in the background (`nohup make test &`) begins with Ctrl-C ignored, and
     # every process it starts would inherit that: the tests of what Ctrl-C does need it as in
     # a terminal. (A handler, unlike "ignore", is not passed on to the processes started.)
@@ -82,6 +84,29 @@ def pytest_xdist_make_scheduler(config, log):
     from scheduling import CrashSafeScopes
 
     return CrashSafeScopes(config, log)
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    # What the test costs, its setup and teardown (a module's shared ones) included.
+    before = cpu_seconds()
+    yield
+    item.config.cpu_meter.add(item.nodeid.split("::")[0], cpu_seconds() - before)
+
+
+def pytest_sessionfinish(session):
+    # A pytest-xdist worker hands its figures to the controller.
+    if hasattr(session.config, "workeroutput"):
+        session.config.workeroutput["cpu_by_module"] = session.config.cpu_meter.by_module
+
+
+def pytest_testnodedown(node, error):
+    node.config.cpu_meter.merge(getattr(node, "workeroutput", {}).get("cpu_by_module", {}))
+
+
+def pytest_terminal_summary(terminalreporter, config):
+    for line in summary(config.cpu_meter.by_module, config.pace):
+        terminalreporter.write_line(line)
 
 
 @pytest.hookimpl(hookwrapper=True)
