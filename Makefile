@@ -50,11 +50,11 @@ venv: $(STAMP)
 run: $(STAMP)
 	$(BIN)/duckie mission --out runs/latest
 
-# Every core, and one worker more: while one waits (a browser, a ROS master, a time limit
-# running out), the others keep the cores busy. pytest-xdist's workers take whole test modules
+# Every core, and two workers more: while one waits (a browser, a ROS master, a time limit
+# running out), the others keep the cores busy (a third of the suite's time is waiting). pytest-xdist's workers take whole test modules
 # (a module's shared setup is made once), the longest first (tests/conftest.py), so that they
 # finish together.
-WORKERS ?= $(shell echo $$(( $$(nproc) + 1 )))
+WORKERS ?= $(shell echo $$(( $$(nproc) + 2 )))
 PARALLEL ?= -n $(WORKERS) --dist loadscope --no-loadscope-reorder
 
 # The project's modules compiled once, even where PYTHONDONTWRITEBYTECODE is set: the suite

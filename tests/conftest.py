@@ -26,24 +26,28 @@ CHROMIUM = Path("/usr/bin/chromium")
 #: together. Figures from ``pytest --durations``; a stale order costs balance, never a test.
 LONGEST_FIRST = (
     "tests/course/test_course_autograde.py",
+    "tests/adversarial/test_adversarial.py",
+    "tests/autograder/test_hub.py",
     "tests/course/test_course_run_all.py",
-    "tests/autograder/test_driving.py",
-    "tests/adversarial/test_class.py",
+    "tests/autograder/test_grade_cluster.py",
     "tests/course/test_course_lab.py",
     "tests/autograder/test_grade.py",
-    "tests/autograder/test_grade_cluster.py",
-    "tests/adversarial/test_adversarial.py",
-    "tests/real_ros/test_robot_safety.py",
+    "tests/adversarial/test_class.py",
     "tests/autograder/test_grade_missions.py",
+    "tests/real_ros/test_robot_safety.py",
+    # It reads the class test_course_autograde.py grades (a shared run): started after it.
+    "tests/autograder/test_driving.py",
     "tests/autograder/test_execute.py",
-    "tests/course/test_course_mistakes.py",
     "tests/real_ros/test_robot_e2e.py",
     "tests/autograder/test_bench_grade.py",
-    "tests/autograder/test_grade_manual.py",
     "tests/autograder/test_tamper.py",
+    "tests/course/test_course_mistakes.py",
+    "tests/autograder/test_grade_manual.py",
+    "tests/tools/test_cli.py",
+    "tests/tools/test_handin.py",
+    "tests/autograder/test_formgrade_browser.py",
     "tests/tools/test_runner.py",
     "tests/real_ros/test_bag_replay.py",
-    "tests/autograder/test_formgrade_browser.py",
 )
 
 
@@ -152,3 +156,13 @@ def browser():
         )
         yield chromium
         chromium.close()
+
+
+@pytest.fixture(scope="session")
+def graded_course(sandbox, tmp_path_factory):
+    """The course graded once per run for every module that reads it, whichever worker
+    asks first (tests/shared_runs.py): its folder, the results by student, the mistakes."""
+    from shared_runs import graded_course as grade
+    from shared_runs import shared
+
+    return shared(tmp_path_factory, "graded_course", grade)

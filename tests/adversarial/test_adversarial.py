@@ -102,7 +102,7 @@ def graded(sandbox, tmp_path_factory):
     with pytest.MonkeyPatch.context() as patch:
         patch.chdir(root)
         results = grade_class(
-            submissions, out, jobs=2, limits=limits, names=[ASSIGNMENT], driving=False
+            submissions, out, jobs=3, limits=limits, names=[ASSIGNMENT], driving=False
         )
     # By folder name as written (a folder nbgrader cannot take as an id is graded under another).
     return {result.shown: result for result in results}, out, paths

@@ -65,14 +65,15 @@ def test_the_points_split_the_driving_over_the_moving_states():
 
 
 @pytest.fixture(scope="module")
-def reference_drives(sandbox, tmp_path_factory):
-    """The reference's notebooks driving every graded mission in the sandbox, and its folder."""
-    box = tmp_path_factory.mktemp("reference") / "box"
-    return drive_missions(ROOT / "solutions", box, Limits()), box
+def reference_drives(graded_course):
+    """The reference's notebooks driving every graded mission in the sandbox: its drives in
+    the class graded once per run (tests/shared_runs.py)."""
+    _, results, _ = graded_course
+    return results["reference"].missions
 
 
 def test_the_reference_drives_every_graded_mission_for_full_marks(reference_drives):
-    missions, box = reference_drives
+    missions = reference_drives
     assert (
         list(missions)
         == list(MISSIONS)
@@ -90,16 +91,22 @@ def test_the_reference_drives_every_graded_mission_for_full_marks(reference_driv
     assert [(m["state"], m["passed"]) for m in missions["rotation"].summary["motion"]] == [
         ("clockwise", 1), ("back", 1),
     ]  # fmt: skip
-    # The nodes' process writes nothing the grader reads: the robot's side, in the grader,
-    # records the bag, and the grader draws each figure from it.
-    assert sorted(path.name for path in box.iterdir()) == ["solution.py"]
     assert all(driving.figure.startswith(b"\x89PNG") for driving in missions.values())
+
+
+def test_the_nodes_process_leaves_nothing_the_grader_reads(sandbox, tmp_path):
+    # The robot's side, in the grader, records the bag, and the grader draws each figure
+    # from it: the nodes' process writes nothing into the folder the grader reads.
+    box = tmp_path / "box"
+    (driving,) = drive_missions(ROOT / "solutions", box, Limits(), missions=["rotation"]).values()
+    assert driving.score == 100
+    assert sorted(path.name for path in box.iterdir()) == ["solution.py"]
 
 
 def test_a_figure_left_in_a_run_folder_never_reaches_the_page(reference_drives, tmp_path):
     # A run folder of duckie mission may hold any trajectory.png next to its bag: the page
     # shows the grader's drawing of the bag it scored.
-    missions, _ = reference_drives
+    missions = reference_drives
     run_mission(mission="rotation", out=tmp_path / "rotation", animation=False)
     forged = b"\x89PNG\r\n\x1a\n" + b"not the run" * 100
     (tmp_path / "rotation" / "trajectory.png").write_bytes(forged)
@@ -167,7 +174,7 @@ def test_a_mission_that_runs_out_of_wall_time_leaves_the_next_ones_undriven(sand
 
 
 def test_the_reference_drives_the_mission_for_full_marks(reference_drives):
-    driving = reference_drives[0]["square_then_circle"]
+    driving = reference_drives["square_then_circle"]
     assert driving.score == MAX_SCORE == 100
     assert driving.parts == part_points()
     assert driving.reasons == []

@@ -1,7 +1,8 @@
 """Gates with the class grader: the solutions score full marks, the release zero, mistakes lose.
 
-One class is graded once, as an instructor grades it with ``duckie grade`` (real nbgrader, each
-notebook in the sandbox, the driving score), and every test here reads its results:
+One class is graded once per run, as an instructor grades it with ``duckie grade`` (real
+nbgrader, each notebook in the sandbox, the driving score), and every test here reads its
+results (``graded_course``, tests/shared_runs.py, which other modules read too):
 ``reference`` is the released course with every graded cell filled with the reference code,
 ``untouched`` is the released course as students receive it, and ``mistaken`` has the first
 deliberately wrong solution of every graded cell (see ``wrong_*.py``).
@@ -15,31 +16,17 @@ from coursetools import (
     answer_keys,
     load,
     notebook_path,
-    reference_answers,
-    student_copy,
-    wrong_solutions,
 )
 
 from autograder.driving import MISSIONS
-from autograder.grade import grade_class
-from autograder.sandbox import Limits
 from duckielib.solution import CONTRACT, load_solution
 
 pytestmark = [pytest.mark.slow, pytest.mark.notebook, pytest.mark.timeout(1200)]
 
 
 @pytest.fixture(scope="module")
-def graded(sandbox, tmp_path_factory):
-    root = tmp_path_factory.mktemp("grading")
-    first_mistakes = {}
-    for (name, grade_id, _), text in wrong_solutions().items():
-        first_mistakes.setdefault((name, grade_id), text)
-    submissions = root / "submissions"
-    student_copy(submissions / "reference", reference_answers())
-    student_copy(submissions / "untouched", {})
-    student_copy(submissions / "mistaken", first_mistakes)
-    results = grade_class(submissions, root / "out", jobs=2, limits=Limits())
-    return root, {result.student: result for result in results}, first_mistakes
+def graded(graded_course):
+    return graded_course
 
 
 def test_the_reference_code_scores_full_marks_in_every_cell(graded):

@@ -20,6 +20,7 @@ finished the course and one who has not started would hand them in.
 from __future__ import annotations
 
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 from claims import CLAIMS, check_claim, markdown_text
@@ -56,16 +57,26 @@ def handed_in(folder, zip_path):
 
 
 @pytest.fixture(scope="module")
-def filled_runs(tmp_path_factory):
-    # A student who finished the course, handing it in.
+def hand_ins(tmp_path_factory):
+    """Both hand-ins, checked side by side (each notebook's kernel waits on its own much of
+    the time): a student who finished the course, and one who has not started and hands in
+    the course as it was released."""
     root = tmp_path_factory.mktemp("run_all")
-    return handed_in(student_copy(root / "filled", reference_answers()), root / "filled.zip")
+    filled = student_copy(root / "filled", reference_answers())
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        finished = pool.submit(handed_in, filled, root / "filled.zip")
+        not_started = pool.submit(handed_in, COURSE, root / "untouched.zip")
+        return finished.result(), not_started.result()
 
 
 @pytest.fixture(scope="module")
-def untouched_runs(tmp_path_factory):
-    # A student who has not started, handing in the course as it was released.
-    return handed_in(COURSE, tmp_path_factory.mktemp("run_all") / "untouched.zip")
+def filled_runs(hand_ins):
+    return hand_ins[0]
+
+
+@pytest.fixture(scope="module")
+def untouched_runs(hand_ins):
+    return hand_ins[1]
 
 
 def claims_broken(run, folder, name):
