@@ -13,7 +13,11 @@ The view is a server of the Foxglove WebSocket protocol (the Foxglove SDK), on t
 only (127.0.0.1). It serves, as ``foxglove_bridge`` serves a real ROS 1 robot:
 
 - every topic of the graph, with ROS 1 bytes and definitions (``ros1`` encoding), from its
-  first publisher's first message;
+  first publisher's first message: its channel is advertised as the publisher is created,
+  and a topic that starts while a viewer watches is held back, from its first message, until
+  a viewer subscribes to it (for at most two wall seconds), so a viewer that subscribes to
+  it as it is advertised has it whole, however short it is (``foxglove_bridge`` sends only
+  what is published after the subscription arrives);
 - the camera's images, which the camera renders only while a viewer shows them;
 - a latched topic's last message when a viewer subscribes to it and no viewer has had it
   yet, as ROS gives it to a new subscriber;
@@ -36,7 +40,7 @@ import math
 import socket
 import threading
 import time
-from typing import Any, Dict, List, Optional, Set
+from typing import Any, Dict, List, Optional, Set, Tuple
 
 import foxglove
 from foxglove import _foxglove_py as _foxglove
@@ -68,6 +72,10 @@ _TIME_PERIOD_NS = 10_000_000
 #: Wall seconds a viewer's panels have to subscribe after its first subscription.
 _SETTLE_S = 1.0
 
+#: Wall seconds a topic that starts while a viewer watches is held back, from its advertisement,
+#: for a viewer to subscribe to it; its messages until then reach the first that does.
+_HOLD_S = 2.0
+
 #: Messages the server holds for a viewer that falls behind, per unit of rate, and at most.
 #: The SDK drops a viewer's oldest message when its queue is full (1,024 by default); a run
 #: at 50 x the wall clock's pace sends about 10,000 messages a second, so a viewer's
@@ -82,18 +90,24 @@ _numbers = itertools.count(1)
 
 
 class _Viewers(ServerListener):
-    """The Foxglove server's listener: which topics viewers subscribe to, and whether any."""
+    """The Foxglove server's listener: which topics viewers subscribe to, and whether any.
+
+    The server calls it from its own threads once a subscription is in place (the channel
+    has the viewer as a sink); :meth:`wait_for` waits for the subscriptions it is told of.
+    """
 
     def __init__(self) -> None:
         self.lock = threading.Lock()
+        self.changed = threading.Condition(self.lock)  # a viewer subscribed
         self.subscriptions: Dict[str, int] = {}  # by topic
         self.new: List[str] = []  # topics subscribed to since the graph last looked
         self.subscribed = threading.Event()
 
     def on_subscribe(self, client: Any, channel: Any) -> None:
-        with self.lock:
+        with self.changed:
             self.subscriptions[channel.topic] = self.subscriptions.get(channel.topic, 0) + 1
             self.new.append(channel.topic)
+            self.changed.notify_all()
         self.subscribed.set()
 
     def take_new(self) -> List[str]:
@@ -108,6 +122,19 @@ class _Viewers(ServerListener):
     def watching(self, topic: str) -> bool:
         with self.lock:
             return self.subscriptions.get(topic, 0) > 0
+
+    def watching_any(self) -> bool:
+        """Whether a viewer subscribes to a topic now."""
+        with self.lock:
+            return any(count > 0 for count in self.subscriptions.values())
+
+    def wait_for(self, topics: List[str], timeout: float) -> None:
+        """Wait (wall seconds, at most ``timeout``) until a viewer subscribes to each topic."""
+        with self.changed:
+            self.changed.wait_for(
+                lambda: all(self.subscriptions.get(topic, 0) > 0 for topic in topics),
+                max(0.0, timeout),
+            )
 
 
 class LiveView:
@@ -172,6 +199,9 @@ class LiveView:
         self._channels: Dict[str, Any] = {}
         self._taps: Dict[str, Tap] = {}
         self._unseen: Set[str] = set()  # topics whose last message reached no viewer
+        # Topics that started while a viewer watched, no viewer subscribed to yet: until when
+        # (wall clock) they are held back, and their messages (bytes, time) until then.
+        self._held: Dict[str, Tuple[float, List[Tuple[bytes, int]]]] = {}
         self._poses = ViewerPoses()
         self._clock = get_message_class("rosgraph_msgs/Clock")
         self._clock_channel = self._channel("/clock", self._clock)
@@ -224,6 +254,8 @@ class LiveView:
             )
             self._channels[topic] = channel
             self.topics[topic] = data_class._type
+            if self._viewers.watching_any():  # a viewer may subscribe to it as it learns of it
+                self._held[topic] = (time.monotonic() + _HOLD_S, [])
         return channel
 
     def _serve(self, topic: str) -> None:
@@ -265,20 +297,55 @@ class LiveView:
     def _deliver(self, record: Any, data: bytes) -> None:
         """Send one message as published, and its viewer's forms."""
         now = self.graph.now_ns
-        channel = self._channels[record.name]
-        if channel.has_sinks():
-            channel.log(data, log_time=now)
+        if self._send(record.name, data, now):
             self._unseen.discard(record.name)
         else:
             self._unseen.add(record.name)
         if record.data_class._type == POSE_2D:
             for made in self._poses.messages(record.name, POSE_2D, data, now):
-                self._channels[made.topic].log(made.data, log_time=now)
+                self._send(made.topic, made.data, now)
+
+    def _send(self, topic: str, data: bytes, t_ns: int) -> bool:
+        """Send one message on ``topic``'s channel, or hold it back for a viewer to come.
+
+        Returns:
+            Whether a viewer has it, or will once it subscribes.
+        """
+        if topic in self._held:
+            self._release(time.monotonic())
+        held = self._held.get(topic)
+        if held is not None:
+            held[1].append((data, t_ns))
+            return True
+        channel = self._channels[topic]
+        if channel.has_sinks():
+            channel.log(data, log_time=t_ns)
+            return True
+        return False
+
+    def _release(self, now: float) -> None:
+        """Send what is held back to the topics a viewer subscribed to; drop it past its time.
+
+        Args:
+            now: the wall clock (``time.monotonic``).
+        """
+        for topic, (until, messages) in list(self._held.items()):
+            channel = self._channels[topic]
+            if channel.has_sinks():
+                del self._held[topic]
+                for data, t_ns in messages:
+                    channel.log(data, log_time=t_ns)
+            elif now >= until:
+                del self._held[topic]
+                if messages and topic in self.graph.topics:
+                    self._unseen.add(topic)  # a latched one still reaches a later viewer
 
     # Time.
 
     def _keep_pace(self, t_ns: int) -> None:
         """Before the clock moves to ``t_ns``: wait for it on the wall clock; say the time."""
+        if self._held:
+            self._release(time.monotonic())
         self._pace.wait(t_ns / NS_PER_S)
         if t_ns >= self._next_time_ns:
             self._server.broadcast_time(t_ns)
@@ -289,7 +356,9 @@ class LiveView:
     def close(self) -> None:
         """Stop serving; the graph runs at full speed again. Closing twice does nothing.
 
-        A viewer gets a quarter of a second to receive the last messages first.
+        A viewer gets a quarter of a second to receive the last messages first, and what is
+        held back of a topic that started in the last two seconds waits for a viewer to
+        subscribe to it for the rest of those two seconds.
         """
         if self.closed:
             return
@@ -300,6 +369,11 @@ class LiveView:
         for tap in self._taps.values():
             tap.unregister()
         self._taps.clear()
+        waiting = [topic for topic, (_, messages) in self._held.items() if messages]
+        if waiting:  # a short topic's viewer may still be subscribing to it
+            until = max(self._held[topic][0] for topic in waiting)
+            self._viewers.wait_for(waiting, until - time.monotonic())
+        self._release(math.inf)
         if self._viewers.subscribed.is_set():
             time.sleep(_LAST_MESSAGES_S)  # what is still queued for a viewer reaches it
         self._server.stop()
