@@ -194,7 +194,8 @@ class LiveView:
                 "another port (--port on the command line)."
             ) from None
         self._host = host
-        self.url = f"ws://{host}:{self._server.port}"
+        self._port = self._server.port  # the server says 0 once it is stopped
+        self.url = f"ws://{host}:{self._port}"
         self.topics: Dict[str, str] = {}
         self._channels: Dict[str, Any] = {}
         self._taps: Dict[str, Tap] = {}
@@ -376,8 +377,8 @@ class LiveView:
         self._release(math.inf)
         if self._viewers.subscribed.is_set():
             time.sleep(_LAST_MESSAGES_S)  # what is still queued for a viewer reaches it
-        self._server.stop()
-        _wait_until_free(self._host, self._server.port)
+        self._server.stop()  # it closes viewers' connections; its threads close the port after
+        _wait_until_free(self._host, self._port)
         for channel in self._channels.values():
             channel.close()
         if not self._node.is_shutdown:
@@ -385,18 +386,27 @@ class LiveView:
 
 
 def _wait_until_free(host: str, port: int, timeout: float = 2.0) -> None:
-    """Wait until the server's port can be bound again: its threads close it a moment later.
+    """Wait (at most ``timeout`` wall seconds) until a server can listen on the port again.
 
-    A view opened on the same port right after (a notebook cell run again) then finds it free.
+    The SDK's server closes its listening socket from its own threads, a moment after its
+    ``stop()`` returns (and its ``port`` is 0 from then on). Waiting here, a view opened on the
+    same port right after (the next ``duckie ... --live``, a notebook cell run again) finds it
+    free. The probe listens as the server does: SO_REUSEADDR, bind, listen; so a viewer's
+    connection not closed yet (the server's end in FIN-WAIT) keeps neither from the port.
     """
+    try:
+        family = socket.getaddrinfo(host, port, type=socket.SOCK_STREAM)[0][0]
+    except OSError:
+        return
     deadline = time.monotonic() + timeout
     while True:
-        with socket.socket() as probe:
-            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as the server binds
+        with socket.socket(family, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             try:
                 probe.bind((host, port))
+                probe.listen()
                 return
             except OSError:
                 if time.monotonic() > deadline:
                     return
-        time.sleep(0.01)
+        time.sleep(0.005)

@@ -188,7 +188,8 @@ def test_a_viewer_sees_every_topic_the_poses_as_frames_the_camera_and_the_time(b
     view.close()
     assert bot.graph._clock_listeners == [bot._advance_physics]
     port = int(view.url.rsplit(":", 1)[1])
-    with LiveView(bot.graph, port=port) as again:  # the port is free again
+    # The port is free again at once, though the viewer has not closed its connection.
+    with LiveView(bot.graph, port=port) as again:
         assert again.url == view.url
 
 
