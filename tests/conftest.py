@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 from cpu_budget import Meter, cpu_seconds, summary
 from pace import pace
+from shared_runs import content_key
 
 _IN_CI = os.environ.get("CI", "").lower() not in ("", "0", "false", "no")
 #: Debian's Chromium, which the browser tests drive (Playwright's own download is not used).
@@ -54,6 +55,8 @@ LONGEST_FIRST = (
 def pytest_configure(config):
     # Measured before the workers start, so that they and what they run share one pace.
     config.pace = pace()
+    # Likewise the key of the shared runs (tests/shared_runs.py).
+    content_key()
     config.cpu_meter = Meter()
     # A suite started in the background (`nohup make test &`) begins with Ctrl-C ignored, and
     # every process it starts would inherit that: the tests of what Ctrl-C does need it as in

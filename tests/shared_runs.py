@@ -17,7 +17,6 @@ folder is read, never written, by the tests that share it.
 from __future__ import annotations
 
 import fcntl
-import functools
 import hashlib
 import os
 import pickle
@@ -38,8 +37,20 @@ class SharedRunError(RuntimeError):
     """The shared run failed where it was made, in this worker or another."""
 
 
-@functools.lru_cache(maxsize=None)
+#: The environment variable that hands the key on: the first process of a session computes it,
+#: before its workers start, so that every worker names a run alike even if a file changes
+#: during the session.
+VARIABLE = "DUCKIE_TEST_CONTENT_KEY"
+
+
 def content_key() -> str:
+    """A key of the files the shared runs are made from, as they were when the session began."""
+    if VARIABLE not in os.environ:
+        os.environ[VARIABLE] = _files_key()
+    return os.environ[VARIABLE]
+
+
+def _files_key() -> str:
     """A key of the files the shared runs are made from (their paths and their bytes)."""
     digest = hashlib.sha256()
     for top in SOURCES:
