@@ -6,7 +6,8 @@ alone would make it once per worker. :func:`shared` makes it once per test sessi
 every worker of the session sees, under a file lock: the first worker to ask makes it while
 the others wait, then each reads what it made. The folder's name holds a key of everything the
 run is made from (the course, the instructors' notebooks, the library, the grader, the robot's
-project and the test helpers), so a run made from other files is never read.
+project and the tests) as they were when the session began, so a run made from other files is
+never read.
 
 A run that raised is not made again by the next worker: each reader fails with its error.
 A run whose worker died half-way (no value and no error) is made again from an empty folder.
