@@ -244,6 +244,7 @@ def view_command(
     from autograder.sandbox.bubblewrap import (
         folders_above,
         generated_robot_folders,
+        namespaces,
         read_only_view,
     )
     from autograder.sandbox.unit_process import grader_paths
@@ -255,15 +256,7 @@ def view_command(
             "bubblewrap, or `make ros`), then start the hub again."
         )
     work = grading_work(root)
-    args = [
-        bwrap,
-        "--unshare-pid",
-        "--unshare-ipc",
-        "--unshare-uts",
-        "--unshare-cgroup-try",
-        "--die-with-parent",
-        "--new-session",
-    ]
+    args = [bwrap, *namespaces(network=False)]  # the hub reaches it over the network
     tmp = ["--perms", "1777", "--size", str(TMP_BYTES), "--tmpfs", "/tmp"]
     shown, made = read_only_view(grader_paths(), tmp)
     args += shown

@@ -37,6 +37,7 @@ from duckielib.errors import DuckielibError
 
 __all__ = [
     "Limits",
+    "namespaces",
     "end_student_groups",
     "student_groups",
     "SandboxError",
@@ -188,6 +189,30 @@ def sandboxed_command(
     return args + _environment(env) + list(command)
 
 
+def namespaces(
+    network: bool = True, processes: bool = True, control_groups: bool = True
+) -> List[str]:
+    """Bubblewrap's options that set a process apart from the machine.
+
+    Its own IPC and host name (and, as asked, its own network, process ids and control-group
+    names); it ends with its parent and runs in a session of its own (no terminal to write to).
+
+    Args:
+        network: no network (its own, empty one).
+        processes: its own process ids (it sees and signals only its own processes).
+        control_groups: its own view of the control groups, where the kernel allows it.
+    """
+    return [
+        *(["--unshare-net"] if network else []),
+        *(["--unshare-pid"] if processes else []),
+        "--unshare-ipc",
+        "--unshare-uts",
+        *(["--unshare-cgroup-try"] if control_groups else []),
+        "--die-with-parent",
+        "--new-session",
+    ]
+
+
 def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
     """Bubblewrap's options for what the sandbox sees of the system: read-only, its own /tmp.
 
@@ -195,15 +220,7 @@ def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
     on that student's file system, :mod:`.unit_process`), a file system of ``limits.disk_bytes``
     otherwise.
     """
-    args = [
-        "--unshare-net",
-        "--unshare-pid",
-        "--unshare-ipc",
-        "--unshare-uts",
-        "--unshare-cgroup-try",
-        "--die-with-parent",
-        "--new-session",
-    ]
+    args = namespaces()
     if tmp is not None:
         shown = ["--bind", str(tmp), "/tmp"]
     else:

@@ -43,6 +43,7 @@ from autograder.sandbox.bubblewrap import (
     SandboxUnavailable,
     _readonly_paths,
     joined,
+    namespaces,
     read_only_view,
     student_groups,
     unit_user,
@@ -111,14 +112,8 @@ def unit_command(
         uid: the student's user, which the process becomes.
     """
     bwrap = shutil.which("bwrap") or "bwrap"
-    args = [
-        bwrap,
-        "--unshare-net",
-        "--unshare-ipc",
-        "--unshare-uts",
-        "--die-with-parent",
-        "--new-session",
-    ]
+    # The machine's process ids and control groups, as the machine's /proc below shows them.
+    args = [bwrap, *namespaces(processes=False, control_groups=False)]
     tmp = ["--perms", "1777", "--size", str(64 * 1024**2), "--tmpfs", "/tmp"]
     args += read_only_view(grader_paths(), tmp)[0]
     args += [
