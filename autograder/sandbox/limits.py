@@ -49,7 +49,8 @@ class Limits:
         student_seconds: wall time of all of one student's notebooks together (each has its
             ``submission_seconds`` too): the notebooks after it are not run, said.
         slow_cell_seconds: a cell outside the tests that takes longer is named in the
-            student's problems (the course's slowest cell takes about 8 s).
+            student's problems (the course's slowest, notebook 11's run of the robot
+            project, takes about 6 s on an idle machine).
     """
 
     cell_seconds: int = 60
