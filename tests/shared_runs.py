@@ -131,10 +131,10 @@ def graded_course(folder: Path) -> Any:
     if course_helpers not in sys.path:
         sys.path.append(course_helpers)
     from coursetools import reference_answers, student_copy, wrong_solutions
+    from pace import seconds
 
     from autograder.grade import grade_class
     from autograder.sandbox import Limits
-    from pace import seconds
 
     first_mistakes: dict = {}
     for (name, grade_id, _), text in wrong_solutions().items():
