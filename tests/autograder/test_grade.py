@@ -52,6 +52,34 @@ def test_the_sandbox_has_no_network(sandbox, tmp_path):
     assert result.stdout.startswith("refused"), result.stdout + result.stderr
 
 
+def test_the_sandbox_reads_matplotlibs_font_list_and_cannot_change_the_graders(
+    sandbox, tmp_path
+):
+    # matplotlib finds the machine's fonts listed (it would list them again, 0.2 s of CPU, in
+    # every sandbox); the list is the grader's, which a student's code cannot write.
+    from autograder.sandbox.bubblewrap import font_list
+
+    before = font_list().read_bytes()
+    result = run_inside(
+        tmp_path,
+        "import logging, os\n"
+        "logging.basicConfig(level=logging.INFO)\n"
+        "from matplotlib import font_manager\n"
+        "from matplotlib.font_manager import findfont\n"
+        "print(os.path.isfile(findfont('DejaVu Sans')))\n"
+        "(name,) = os.listdir(os.environ['MPLCONFIGDIR'])\n"
+        "try:\n"
+        "    open(os.path.join(os.environ['MPLCONFIGDIR'], name), 'w').write('{}')\n"
+        "except OSError as error:\n"
+        "    print('refused', error.strerror)\n",
+    )
+    assert result.stdout.split("\n")[:2] == ["True", "refused Read-only file system"], (
+        result.stdout + result.stderr
+    )
+    assert "generated new fontManager" not in result.stderr
+    assert font_list().read_bytes() == before
+
+
 def test_the_sandbox_hides_the_course_and_the_grader(sandbox, tmp_path):
     (tmp_path / "gradebook.db").write_text("hidden tests")
     code = (
@@ -147,6 +175,34 @@ def _loop_forever(notebook) -> None:
     for cell in notebook.cells:
         if cell.get("metadata", {}).get("nbgrader", {}).get("grade_id") == "wrap_angle":
             cell.source = "def wrap_angle(theta):\n    while True:\n        pass\n"
+
+
+def test_a_new_gradebook_is_stamped_as_alembic_heads_says_with_no_command_started(
+    tmp_path, monkeypatch
+):
+    import sqlite3
+
+    from nbgrader.api import Gradebook
+    from nbgrader.dbutil import write_alembic_ini
+
+    from autograder.course import gradebook_revision, nbgrader_api, nbgrader_config
+
+    ini = tmp_path / "alembic.ini"
+    write_alembic_ini(str(ini), f"sqlite:///{tmp_path / 'any.db'}")
+    heads = subprocess.run(
+        [str(Path(sys.executable).parent / "alembic"), "-c", str(ini), "heads"],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert heads.stdout.split()[0] == gradebook_revision()
+    nbgrader_api(nbgrader_config(root=tmp_path, db=tmp_path / "gradebook.db"))
+    monkeypatch.setenv("PATH", str(tmp_path / "no-programs-here"))  # no alembic to start
+    with Gradebook(f"sqlite:///{tmp_path / 'new.db'}"):
+        pass
+    with sqlite3.connect(tmp_path / "new.db") as database:
+        (stamped,) = database.execute("SELECT version_num FROM alembic_version").fetchall()
+    assert stamped == (gradebook_revision(),)
 
 
 def test_a_class_is_graded_in_parallel_with_one_gradebook(sandbox, tmp_path):
