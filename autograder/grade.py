@@ -610,7 +610,9 @@ def _client(jobs: int, scheduler: Optional[str]) -> Tuple[Any, Any]:
         # No dashboard; the scheduler's small HTTP server (health, metrics) on any free port,
         # so that two gradings at once never compete for Dask's usual 8787.
         scheduler_kwargs={"dashboard_address": ":0"},
-        silence_logs=logging.ERROR,
+        # Dask's own log says nothing an instructor acts on (what fails is said for the student
+        # it failed on), and at a Ctrl-C its workers print tracebacks as the scheduler goes.
+        silence_logs=logging.CRITICAL,
         # A worker's memory is its units' business (each is a process of its own).
         memory_limit=0,
     )

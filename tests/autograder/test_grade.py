@@ -52,9 +52,7 @@ def test_the_sandbox_has_no_network(sandbox, tmp_path):
     assert result.stdout.startswith("refused"), result.stdout + result.stderr
 
 
-def test_the_sandbox_reads_matplotlibs_font_list_and_cannot_change_the_graders(
-    sandbox, tmp_path
-):
+def test_the_sandbox_reads_matplotlibs_font_list_and_cannot_change_the_graders(sandbox, tmp_path):
     # matplotlib finds the machine's fonts listed (it would list them again, 0.2 s of CPU, in
     # every sandbox); the list is the grader's, which a student's code cannot write.
     from autograder.sandbox.bubblewrap import font_list
