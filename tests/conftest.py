@@ -12,7 +12,7 @@ import signal
 from pathlib import Path
 
 import pytest
-from cpu_budget import Meter, cpu_seconds, summary
+from cpu_budget import Meter, busy_line, cpu_seconds, machine_ticks, summary
 from pace import pace
 from shared_runs import content_key
 
@@ -58,6 +58,7 @@ def pytest_configure(config):
     # Likewise the key of the shared runs (tests/shared_runs.py).
     content_key()
     config.cpu_meter = Meter()
+    config.machine_ticks = machine_ticks()
     # A suite started in the background (`nohup make test &`) begins with Ctrl-C ignored, and
     # every process it starts would inherit that: the tests of what Ctrl-C does need it as in
     # a terminal. (A handler, unlike "ignore", is not passed on to the processes started.)
@@ -114,6 +115,9 @@ def pytest_testnodedown(node, error):
 def pytest_terminal_summary(terminalreporter, config):
     for line in summary(config.cpu_meter.by_module, config.pace):
         terminalreporter.write_line(line)
+    busy = busy_line(config.machine_ticks, machine_ticks(), os.cpu_count() or 1)
+    if busy and config.cpu_meter.by_module:
+        terminalreporter.write_line(busy)
 
 
 @pytest.hookimpl(hookwrapper=True)

@@ -7,15 +7,26 @@ setup falls to its first test, its teardown to its last. pytest-xdist's workers 
 figures to the controller when they end. ``make test`` then prints the modules that cost most
 and each area against its budget (:data:`BUDGETS`), in CPU seconds of the reference machine:
 the figures measured here are divided by the pace (``tests/pace.py``), so that a slower machine
-is not said to be over.
+is not said to be over. Last, how busy the machine's CPUs were over the run (:func:`busy_line`):
+browsers and servers the tests did not wait for count there, and not in the modules' figures.
 """
 
 from __future__ import annotations
 
 import resource
+from pathlib import Path
 from typing import Dict, List, Tuple
 
-__all__ = ["AREAS", "BUDGETS", "Meter", "area_of", "cpu_seconds", "summary"]
+__all__ = [
+    "AREAS",
+    "BUDGETS",
+    "Meter",
+    "area_of",
+    "busy_line",
+    "cpu_seconds",
+    "machine_ticks",
+    "summary",
+]
 
 #: The suite's areas, by the folder or module their tests are in (the first that matches).
 AREAS: Tuple[Tuple[str, str], ...] = (
@@ -59,6 +70,31 @@ def cpu_seconds() -> float:
     own = resource.getrusage(resource.RUSAGE_SELF)
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+
+
+def machine_ticks() -> Tuple[int, int]:
+    """The machine's CPU time since it started, in clock ticks: (busy, in all), by /proc/stat.
+
+    Every process of the machine counts, the suite's (those it did not wait for too: browsers,
+    servers) and any other; idle and waiting for a disk are not busy.
+    """
+    try:
+        first = Path("/proc/stat").read_text(encoding="ascii").split("\n", 1)[0]
+    except OSError:
+        return 0, 0
+    ticks = [int(value) for value in first.split()[1:9]]  # user to steal; guests are in user
+    return sum(ticks) - ticks[3] - ticks[4], sum(ticks)
+
+
+def busy_line(before: Tuple[int, int], after: Tuple[int, int], cpus: int) -> str:
+    """How busy the machine's CPUs were between two :func:`machine_ticks`, in one sentence."""
+    busy, total = after[0] - before[0], after[1] - before[1]
+    if total <= 0:
+        return ""
+    return (
+        f"The machine's {cpus} CPUs were busy {100 * busy / total:.0f}% of the run "
+        "(every process on it, the suite's and any other)."
+    )
 
 
 class Meter:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from cpu_budget import BUDGETS, Meter, area_of, cpu_seconds, summary
+from cpu_budget import BUDGETS, Meter, area_of, busy_line, cpu_seconds, machine_ticks, summary
 
 
 def test_each_module_belongs_to_one_area_with_a_budget():
@@ -40,3 +40,18 @@ def test_a_process_counts_what_it_and_its_children_spent():
     before = cpu_seconds()
     subprocess.run([sys.executable, "-c", "sum(range(3_000_000))"], check=True)
     assert cpu_seconds() - before > 0.05
+
+
+def test_the_run_says_how_busy_the_machine_was():
+    import subprocess
+    import sys
+
+    before = machine_ticks()
+    subprocess.run([sys.executable, "-c", "sum(range(3_000_000))"], check=True)
+    after = machine_ticks()
+    assert 0 < after[0] - before[0] <= after[1] - before[1]
+    assert busy_line((100, 400), (250, 600), 2) == (
+        "The machine's 2 CPUs were busy 75% of the run (every process on it, the suite's and "
+        "any other)."
+    )
+    assert busy_line(before, before, 2) == ""
