@@ -51,7 +51,8 @@ run: $(STAMP)
 	$(BIN)/duckie mission --out runs/latest
 
 # Every core, and two workers more: while one waits (a browser, a ROS master, a time limit
-# running out), the others keep the cores busy (a third of the suite's time is waiting). pytest-xdist's workers take whole test modules
+# running out), the others keep the cores busy; more than that only share the same busy cores
+# (make test's last line says how busy). pytest-xdist's workers take whole test modules
 # (a module's shared setup is made once), the longest first (tests/conftest.py), so that they
 # finish together.
 WORKERS ?= $(shell echo $$(( $$(nproc) + 2 )))
