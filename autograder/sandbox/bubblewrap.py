@@ -55,6 +55,8 @@ __all__ = [
 
 #: The first of the user ids given to students' gradings (:func:`unit_user`).
 FIRST_UNIT_USER = 1_000_000
+#: matplotlib's cache folder inside the sandbox (``MPLCONFIGDIR``), where its font list is.
+MATPLOTLIB_CACHE = "/tmp/matplotlib"
 #: Where the submission's own folder appears inside the sandbox.
 INSIDE = "/sandbox"
 #: Where the student's notebooks appear (read-only) when a notebook needs its neighbours.
@@ -229,7 +231,7 @@ def _system_view(limits: Limits, tmp: Optional[Path] = None) -> List[str]:
     else:
         shown = ["--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", "/tmp"]
     args += read_only_view(_readonly_paths(), shown)[0]
-    args += fonts_view(_environment_base()["MPLCONFIGDIR"])
+    args += fonts_view(MATPLOTLIB_CACHE)
     # `duckie robot prepare` writes a solution into the robot project (the reference one, on an
     # instructor's machine): those folders stay out of sight.
     for path in generated_robot_folders():
@@ -371,21 +373,14 @@ def scratch() -> Iterator[Optional[Path]]:
 
 def _environment(env: Optional[Dict[str, str]]) -> List[str]:
     """The sandbox's environment variables, as ``env -i`` takes them: its own, then ``env``."""
-    base = _environment_base()
-    base.update(env or {})
-    return [f"{key}={value}" for key, value in base.items()]
-
-
-def _environment_base() -> Dict[str, str]:
-    """The sandbox's own environment variables."""
-    return {
+    base = {
         "HOME": "/tmp",
         "USER": "student",  # the user may have no name on this machine
         "LOGNAME": "student",
         "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin",
         "LANG": "C.UTF-8",
         "MPLBACKEND": "Agg",
-        "MPLCONFIGDIR": "/tmp/matplotlib",
+        "MPLCONFIGDIR": MATPLOTLIB_CACHE,
         "JUPYTER_RUNTIME_DIR": "/tmp/jupyter",
         "IPYTHONDIR": "/tmp/ipython",
         "PYTHONDONTWRITEBYTECODE": "1",
@@ -394,6 +389,8 @@ def _environment_base() -> Dict[str, str]:
         "OMP_NUM_THREADS": "1",
         "MKL_NUM_THREADS": "1",
     }
+    base.update(env or {})
+    return [f"{key}={value}" for key, value in base.items()]
 
 
 class Started:

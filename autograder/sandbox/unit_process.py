@@ -66,6 +66,8 @@ __all__ = [
 UNIT_INSIDE = "/unit"
 #: The file system the student's sandboxes write in (``Limits.disk_bytes``).
 STUDENT_DISK = f"{UNIT_INSIDE}/student"
+#: matplotlib's cache folder there (``MPLCONFIGDIR``), where its font list is.
+_MATPLOTLIB_CACHE = f"{UNIT_INSIDE}/tmp/matplotlib"
 #: The size of the file system of the grader's own files for a student (nbgrader's trees, the
 #: gradebook's copy, the missions' bags): the reference course needs about 60 MB.
 GRADER_DISK_BYTES = 1024**3
@@ -125,7 +127,7 @@ def unit_command(
         "--bind", "/proc", "/proc",
         "--perms", "1777", "--size", str(GRADER_DISK_BYTES), "--tmpfs", UNIT_INSIDE,
         "--perms", "1777", "--dir", f"{UNIT_INSIDE}/tmp",
-        *fonts_view(_environment()["MPLCONFIGDIR"]),
+        *fonts_view(_MATPLOTLIB_CACHE),
         "--perms", "1777", "--size", str(limits.disk_bytes), "--tmpfs", STUDENT_DISK,
         "--ro-bind", str(folder / "task.json"), f"{UNIT_INSIDE}/task.json",
         "--ro-bind", str(folder / "submission"), f"{UNIT_INSIDE}/submission",
@@ -218,7 +220,7 @@ def _environment() -> Dict[str, str]:
         "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin",
         "LANG": "C.UTF-8",
         "MPLBACKEND": "Agg",
-        "MPLCONFIGDIR": f"{UNIT_INSIDE}/tmp/matplotlib",
+        "MPLCONFIGDIR": _MATPLOTLIB_CACHE,
         "PYTHONDONTWRITEBYTECODE": "1",
         "OPENBLAS_NUM_THREADS": "1",
         "OMP_NUM_THREADS": "1",
